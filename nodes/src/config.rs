@@ -1,0 +1,239 @@
+//! The whole configuration of a session: one typed struct per `config/default.toml` section.
+//!
+//! Every section struct is `#[serde(deny_unknown_fields, default)]` with a `Default` equal to the
+//! shipped `config/default.toml`, and a `validate(&self, &Checker)` that range-checks it.
+
+use crate::geom::{Camera, CameraMount};
+use runtime::config::{Checker, ConfigError};
+use serde::Deserialize;
+use std::path::{Path, PathBuf};
+
+/// The shipped defaults, built into the binary so it runs from any directory.
+pub const DEFAULT_TOML: &str = include_str!("../../config/default.toml");
+/// Path of the shipped defaults relative to the repository root.
+pub const DEFAULT_PATH: &str = "config/default.toml";
+
+/// All sections of a configuration file.
+#[derive(Debug, Clone, Default, Deserialize)]
+#[serde(deny_unknown_fields, default)]
+pub struct Config {
+    /// Depth camera and mount.
+    pub camera: CameraConfig,
+    /// Node rates.
+    pub rates: RatesConfig,
+    /// Periodic executor defaults (scheduling, spin margin, miss policy).
+    pub executor: runtime::executor::ExecutorConfig,
+    /// iceoryx2 service settings.
+    pub ports: runtime::ports::PortsConfig,
+    /// World simulation (noise, seed).
+    pub sim: crate::sim::SimConfig,
+    /// Simulated detector.
+    pub detector: crate::sim::DetectorConfig,
+    /// Simulated base and neck.
+    pub robot: crate::sim::RobotConfig,
+    /// Sparse object mapping and SOPM.
+    pub mapper: crate::mapper::MapperConfig,
+    /// View planning (VP-SOM and baselines).
+    pub planner: crate::planner::PlannerConfig,
+}
+
+/// The RGB-D camera (paper: Kinect v2 on the FABO robot's head).
+#[derive(Debug, Clone, Copy, PartialEq, Deserialize)]
+#[serde(deny_unknown_fields, default)]
+pub struct CameraConfig {
+    /// Image width, pixels (≤ 640).
+    pub width: u32,
+    /// Image height, pixels (≤ 480).
+    pub height: u32,
+    /// Horizontal field of view, degrees.
+    pub hfov_deg: f32,
+    /// Vertical field of view, degrees.
+    pub vfov_deg: f32,
+    /// Nearest valid depth, metres.
+    pub min_range: f32,
+    /// Farthest valid depth, metres.
+    pub max_range: f32,
+    /// Where the camera sits on the robot.
+    pub mount: CameraMount,
+}
+
+impl Default for CameraConfig {
+    fn default() -> Self {
+        Self {
+            width: 640,
+            height: 480,
+            hfov_deg: 60.0,
+            vfov_deg: 46.8,
+            min_range: 0.5,
+            max_range: 5.0,
+            mount: CameraMount::default(),
+        }
+    }
+}
+
+impl CameraConfig {
+    /// The pinhole model.
+    pub fn camera(&self) -> Camera {
+        Camera::from_fov(
+            self.width,
+            self.height,
+            self.hfov_deg,
+            self.vfov_deg,
+            self.min_range,
+            self.max_range,
+        )
+    }
+
+    fn validate(&self, c: &Checker) -> Result<(), ConfigError> {
+        c.count(
+            "camera.width",
+            self.width as usize,
+            16,
+            shm_types::MAX_WIDTH,
+        )?;
+        c.count(
+            "camera.height",
+            self.height as usize,
+            16,
+            shm_types::MAX_HEIGHT,
+        )?;
+        c.in_range("camera.hfov_deg", self.hfov_deg.into(), 10.0, 170.0)?;
+        c.in_range("camera.vfov_deg", self.vfov_deg.into(), 10.0, 170.0)?;
+        c.in_range("camera.min_range", self.min_range.into(), 0.0, 100.0)?;
+        c.require(
+            self.max_range > self.min_range && self.max_range <= 100.0,
+            "camera.max_range",
+            self.max_range,
+            "must be > camera.min_range and ≤ 100",
+        )?;
+        c.in_range("camera.mount.height", self.mount.height.into(), 0.05, 5.0)?;
+        c.in_range(
+            "camera.mount.forward_offset",
+            self.mount.forward_offset.into(),
+            -2.0,
+            2.0,
+        )?;
+        c.in_range(
+            "camera.mount.pitch_deg",
+            self.mount.pitch_deg.into(),
+            -89.0,
+            89.0,
+        )
+    }
+}
+
+/// Fixed rates of the deployment host (simulated seconds).
+#[derive(Debug, Clone, Copy, PartialEq, Deserialize)]
+#[serde(deny_unknown_fields, default)]
+pub struct RatesConfig {
+    /// Depth frames and detections, Hz (paper: 20–30).
+    pub camera_hz: f64,
+    /// Robot state, Hz.
+    pub state_hz: f64,
+    /// Object map publication, Hz.
+    pub map_hz: f64,
+}
+
+impl Default for RatesConfig {
+    fn default() -> Self {
+        Self {
+            camera_hz: 30.0,
+            state_hz: 50.0,
+            map_hz: 10.0,
+        }
+    }
+}
+
+impl RatesConfig {
+    fn validate(&self, c: &Checker) -> Result<(), ConfigError> {
+        c.in_range("rates.camera_hz", self.camera_hz, 0.1, 120.0)?;
+        c.in_range("rates.state_hz", self.state_hz, 0.1, 1000.0)?;
+        c.in_range("rates.map_hz", self.map_hz, 0.1, 120.0)
+    }
+}
+
+impl Config {
+    /// Parse and validate configuration text that came from `file`.
+    pub fn parse(file: &Path, text: &str) -> Result<Self, ConfigError> {
+        let cfg: Config = runtime::config::parse_toml(file, text)?;
+        cfg.validate(file)?;
+        Ok(cfg)
+    }
+
+    /// Load and validate a configuration file.
+    pub fn load(file: &Path) -> Result<Self, ConfigError> {
+        let text = std::fs::read_to_string(file).map_err(|source| ConfigError::Read {
+            file: file.to_path_buf(),
+            source,
+        })?;
+        Self::parse(file, &text)
+    }
+
+    /// `file` if given; else `config/default.toml` in the working directory if present; else the
+    /// built-in copy of it. Returns the config and where it came from.
+    pub fn load_or_default(file: Option<&Path>) -> Result<(Self, PathBuf), ConfigError> {
+        match file {
+            Some(f) => Ok((Self::load(f)?, f.to_path_buf())),
+            None if Path::new(DEFAULT_PATH).is_file() => Ok((
+                Self::load(Path::new(DEFAULT_PATH))?,
+                PathBuf::from(DEFAULT_PATH),
+            )),
+            None => Ok((
+                Self::builtin(),
+                PathBuf::from("<built-in config/default.toml>"),
+            )),
+        }
+    }
+
+    /// The built-in defaults (`config/default.toml` as compiled in).
+    pub fn builtin() -> Self {
+        Self::parse(Path::new(DEFAULT_PATH), DEFAULT_TOML)
+            .expect("the shipped config/default.toml is valid")
+    }
+
+    /// Range-check every section.
+    pub fn validate(&self, file: &Path) -> Result<(), ConfigError> {
+        let c = Checker::new(file);
+        self.camera.validate(&c)?;
+        self.rates.validate(&c)?;
+        self.executor.validate(&c)?;
+        self.ports.validate(&c)?;
+        self.sim.validate(&c)?;
+        self.detector.validate(&c)?;
+        self.robot.validate(&c)?;
+        self.mapper.validate(&c)?;
+        self.planner.validate(&c)
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn shipped_default_loads_and_equals_struct_defaults_for_camera_and_rates() {
+        let cfg = Config::builtin();
+        assert_eq!(cfg.camera, CameraConfig::default());
+        assert_eq!(cfg.rates, RatesConfig::default());
+    }
+
+    #[test]
+    fn bad_files_give_specific_errors() {
+        let f = Path::new("bad.toml");
+        let e = Config::parse(f, "[camera]\nwidht = 320\n").unwrap_err();
+        assert_eq!(e.key(), "camera.widht", "{e}");
+        let e = Config::parse(f, "[camra]\n").unwrap_err();
+        assert!(e.to_string().contains("unknown field `camra`"), "{e}");
+        let e = Config::parse(f, "[camera]\nwidth = 2000\n").unwrap_err();
+        assert_eq!(
+            e.to_string(),
+            "bad.toml: camera.width = 2000: must be in [16, 640]"
+        );
+        let e = Config::parse(f, "[rates]\ncamera_hz = -3.0\n").unwrap_err();
+        assert_eq!(e.key(), "rates.camera_hz");
+        let e = Config::parse(f, "[camera]\nmin_range = 2.0\nmax_range = 1.0\n").unwrap_err();
+        assert_eq!(e.key(), "camera.max_range");
+        let e = Config::load(Path::new("/nonexistent/x.toml")).unwrap_err();
+        assert!(matches!(e, ConfigError::Read { .. }), "{e}");
+    }
+}

@@ -1,0 +1,309 @@
+//! Shared geometry: frames, the robot's camera mount, the pinhole model and cuboids.
+//!
+//! Frames (see `shm_types`): world z up; camera = OpenCV optical frame (x right, y down,
+//! z forward). Poses are `parent_from_child`. Scalars are `f32` (glam), like the messages.
+
+use glam::{Affine3A, Mat3, Quat, Vec2, Vec3};
+use serde::Deserialize;
+use shm_types::{Intrinsics, Pose3};
+
+/// `world_from_camera` (or any `parent_from_child`) of a message, as a glam transform.
+pub fn pose_to_affine(p: &Pose3) -> Affine3A {
+    let [x, y, z, w] = p.rotation;
+    Affine3A::from_rotation_translation(
+        Quat::from_xyzw(x, y, z, w).normalize(),
+        Vec3::from(p.translation),
+    )
+}
+
+/// A glam rigid transform as a message pose.
+pub fn affine_to_pose(a: &Affine3A) -> Pose3 {
+    let (_, rot, t) = a.to_scale_rotation_translation();
+    Pose3 {
+        translation: t.to_array(),
+        rotation: rot.normalize().to_array(),
+    }
+}
+
+/// Rotation `world_from_camera` of an optical camera whose forward axis has world yaw `yaw`
+/// and is pitched down by `pitch` (radians).
+pub fn optical_rotation(yaw: f32, pitch: f32) -> Mat3 {
+    let (sy, cy) = yaw.sin_cos();
+    let (sp, cp) = pitch.sin_cos();
+    let forward = Vec3::new(cy * cp, sy * cp, -sp);
+    let right = Vec3::new(sy, -cy, 0.0);
+    let down = forward.cross(right);
+    Mat3::from_cols(right, down, forward)
+}
+
+/// World yaw and downward pitch of an optical camera's forward axis.
+pub fn yaw_pitch_of(world_from_camera: &Affine3A) -> (f32, f32) {
+    let f = world_from_camera.matrix3.z_axis;
+    (f.y.atan2(f.x), (-f.z).clamp(-1.0, 1.0).asin())
+}
+
+/// How the camera sits on the robot: on a neck that turns about the vertical axis.
+#[derive(Debug, Clone, Copy, PartialEq, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct CameraMount {
+    /// Camera optical centre above the floor, metres (paper: 1.4).
+    pub height: f32,
+    /// Horizontal offset of the neck axis ahead of the base centre, metres.
+    pub forward_offset: f32,
+    /// Fixed downward pitch of the camera, degrees (paper: 28).
+    pub pitch_deg: f32,
+}
+
+impl Default for CameraMount {
+    fn default() -> Self {
+        Self {
+            height: 1.4,
+            forward_offset: 0.0,
+            pitch_deg: 28.0,
+        }
+    }
+}
+
+impl CameraMount {
+    /// `world_from_camera` for a base pose `[x, y, yaw]`, a neck yaw relative to the base and a
+    /// camera pitch (radians, positive down).
+    pub fn camera_pose(&self, base: [f32; 3], neck_yaw: f32, pitch: f32) -> Affine3A {
+        let [x, y, yaw] = base;
+        let neck = Vec3::new(
+            x + self.forward_offset * yaw.cos(),
+            y + self.forward_offset * yaw.sin(),
+            self.height,
+        );
+        Affine3A::from_mat3_translation(optical_rotation(yaw + neck_yaw, pitch), neck)
+    }
+
+    /// The mount's fixed pitch in radians.
+    pub fn pitch(&self) -> f32 {
+        self.pitch_deg.to_radians()
+    }
+}
+
+/// Pinhole camera with image size and valid depth range.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct Camera {
+    /// Image width, pixels.
+    pub width: u32,
+    /// Image height, pixels.
+    pub height: u32,
+    /// Intrinsics and range.
+    pub k: Intrinsics,
+}
+
+impl Camera {
+    /// A centred pinhole camera with the given fields of view (degrees) and depth range (metres).
+    pub fn from_fov(
+        width: u32,
+        height: u32,
+        hfov_deg: f32,
+        vfov_deg: f32,
+        min_range: f32,
+        max_range: f32,
+    ) -> Self {
+        let fx = width as f32 / 2.0 / (hfov_deg.to_radians() / 2.0).tan();
+        let fy = height as f32 / 2.0 / (vfov_deg.to_radians() / 2.0).tan();
+        let k = Intrinsics {
+            fx,
+            fy,
+            cx: width as f32 / 2.0,
+            cy: height as f32 / 2.0,
+            min_range,
+            max_range,
+        };
+        Self { width, height, k }
+    }
+
+    /// Pixel coordinates (continuous, pixel centres at +0.5) of a camera-frame point in front
+    /// of the camera, without bounds checks; `None` behind the camera.
+    pub fn project(&self, p_cam: Vec3) -> Option<Vec2> {
+        (p_cam.z > 1e-6).then(|| {
+            Vec2::new(
+                self.k.fx * p_cam.x / p_cam.z + self.k.cx,
+                self.k.fy * p_cam.y / p_cam.z + self.k.cy,
+            )
+        })
+    }
+
+    /// Camera-frame ray through pixel `(u, v)` scaled so that its z is 1 (hit time = depth).
+    pub fn ray(&self, u: f32, v: f32) -> Vec3 {
+        Vec3::new(
+            (u - self.k.cx) / self.k.fx,
+            (v - self.k.cy) / self.k.fy,
+            1.0,
+        )
+    }
+
+    /// Camera-frame point of pixel `(u, v)` at depth `z` metres.
+    pub fn unproject(&self, u: f32, v: f32, z: f32) -> Vec3 {
+        self.ray(u, v) * z
+    }
+
+    /// Whether a camera-frame point is inside the image and the depth range.
+    pub fn sees(&self, p_cam: Vec3) -> bool {
+        if p_cam.z < self.k.min_range || p_cam.z > self.k.max_range {
+            return false;
+        }
+        match self.project(p_cam) {
+            Some(px) => {
+                px.x >= 0.0 && px.y >= 0.0 && px.x < self.width as f32 && px.y < self.height as f32
+            }
+            None => false,
+        }
+    }
+}
+
+/// An upright cuboid: centre, size along its own axes, yaw about +z.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct Cuboid {
+    /// Centre, world frame.
+    pub center: Vec3,
+    /// Extent along the cuboid's x, y, z.
+    pub size: Vec3,
+    /// Yaw about +z, radians.
+    pub yaw: f32,
+}
+
+impl Cuboid {
+    /// The eight corners, world frame.
+    pub fn corners(&self) -> [Vec3; 8] {
+        let h = self.size * 0.5;
+        let rot = Mat3::from_rotation_z(self.yaw);
+        let mut out = [Vec3::ZERO; 8];
+        for (i, c) in out.iter_mut().enumerate() {
+            let sx = if i & 1 == 0 { -h.x } else { h.x };
+            let sy = if i & 2 == 0 { -h.y } else { h.y };
+            let sz = if i & 4 == 0 { -h.z } else { h.z };
+            *c = self.center + rot * Vec3::new(sx, sy, sz);
+        }
+        out
+    }
+
+    /// Whether a world point lies inside (with a margin, metres).
+    pub fn contains(&self, p: Vec3, margin: f32) -> bool {
+        let local = Mat3::from_rotation_z(-self.yaw) * (p - self.center);
+        let h = self.size * 0.5 + Vec3::splat(margin);
+        local.x.abs() <= h.x && local.y.abs() <= h.y && local.z.abs() <= h.z
+    }
+
+    /// Axis-aligned 2D box `[x0, y0, x1, y1]` (pixels, clipped to the image) of the cuboid's
+    /// projection, or `None` if no corner is in front of the camera or the box is off-image.
+    /// Corners behind the camera are ignored (a conservative approximation).
+    pub fn image_box(&self, camera: &Camera, world_from_camera: &Affine3A) -> Option<[f32; 4]> {
+        let cam_from_world = world_from_camera.inverse();
+        let mut b = [
+            f32::INFINITY,
+            f32::INFINITY,
+            f32::NEG_INFINITY,
+            f32::NEG_INFINITY,
+        ];
+        let mut any = false;
+        for c in self.corners() {
+            if let Some(px) = camera.project(cam_from_world.transform_point3(c)) {
+                any = true;
+                b = [
+                    b[0].min(px.x),
+                    b[1].min(px.y),
+                    b[2].max(px.x),
+                    b[3].max(px.y),
+                ];
+            }
+        }
+        if !any {
+            return None;
+        }
+        let (w, h) = (camera.width as f32, camera.height as f32);
+        let clipped = [
+            b[0].clamp(0.0, w),
+            b[1].clamp(0.0, h),
+            b[2].clamp(0.0, w),
+            b[3].clamp(0.0, h),
+        ];
+        (clipped[2] > clipped[0] && clipped[3] > clipped[1]).then_some(clipped)
+    }
+}
+
+/// Wrap an angle to `(-π, π]`.
+pub fn wrap_angle(a: f32) -> f32 {
+    let mut a = a % std::f32::consts::TAU;
+    if a > std::f32::consts::PI {
+        a -= std::f32::consts::TAU;
+    } else if a <= -std::f32::consts::PI {
+        a += std::f32::consts::TAU;
+    }
+    a
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use std::f32::consts::{FRAC_PI_2, PI};
+
+    fn close(a: Vec3, b: Vec3) -> bool {
+        (a - b).length() < 1e-5
+    }
+
+    #[test]
+    fn optical_frame_axes() {
+        let r = optical_rotation(0.0, 0.0);
+        assert!(close(r.z_axis, Vec3::X) && close(r.x_axis, -Vec3::Y) && close(r.y_axis, -Vec3::Z));
+        let r = optical_rotation(FRAC_PI_2, 0.0);
+        assert!(close(r.z_axis, Vec3::Y));
+        let r = optical_rotation(0.0, 28f32.to_radians());
+        assert!(r.z_axis.z < -0.46 && r.z_axis.z > -0.47, "pitched down");
+        assert!((r.determinant() - 1.0).abs() < 1e-5);
+    }
+
+    #[test]
+    fn mount_pose_round_trips_through_messages() {
+        let m = CameraMount::default();
+        let a = m.camera_pose([1.0, 2.0, PI], 0.5, m.pitch());
+        assert!((a.translation.z - 1.4).abs() < 1e-6);
+        let (yaw, pitch) = yaw_pitch_of(&a);
+        assert!((wrap_angle(yaw - (PI + 0.5))).abs() < 1e-5);
+        assert!((pitch - 28f32.to_radians()).abs() < 1e-5);
+        let b = pose_to_affine(&affine_to_pose(&a));
+        assert!(close(b.translation.into(), a.translation.into()));
+        assert!(close(b.matrix3.z_axis.into(), a.matrix3.z_axis.into()));
+    }
+
+    #[test]
+    fn pinhole_projects_and_unprojects() {
+        let c = Camera::from_fov(640, 480, 60.0, 46.8, 0.5, 5.0);
+        assert!((c.k.fx - 554.256).abs() < 1e-2);
+        let p = c.unproject(100.0, 50.0, 2.0);
+        let px = c.project(p).unwrap();
+        assert!((px.x - 100.0).abs() < 1e-3 && (px.y - 50.0).abs() < 1e-3);
+        assert!(c.sees(Vec3::new(0.0, 0.0, 2.0)));
+        assert!(!c.sees(Vec3::new(0.0, 0.0, 6.0)));
+        assert!(!c.sees(Vec3::new(5.0, 0.0, 2.0)));
+        assert!(c.project(Vec3::new(0.0, 0.0, -1.0)).is_none());
+    }
+
+    #[test]
+    fn cuboid_contains_and_projects() {
+        let b = Cuboid {
+            center: Vec3::new(2.0, 0.0, 0.0),
+            size: Vec3::new(0.2, 0.4, 0.2),
+            yaw: FRAC_PI_2,
+        };
+        assert!(b.contains(Vec3::new(2.19, 0.0, 0.0), 0.0));
+        assert!(!b.contains(Vec3::new(2.0, 0.15, 0.0), 0.0));
+        let cam = Camera::from_fov(640, 480, 60.0, 46.8, 0.5, 5.0);
+        let pose = Affine3A::from_mat3_translation(optical_rotation(0.0, 0.0), Vec3::ZERO);
+        let bx = b.image_box(&cam, &pose).unwrap();
+        assert!(bx[0] < 320.0 && bx[2] > 320.0 && bx[1] < 240.0 && bx[3] > 240.0);
+        let behind = Affine3A::from_mat3_translation(optical_rotation(PI, 0.0), Vec3::ZERO);
+        assert!(b.image_box(&cam, &behind).is_none());
+    }
+
+    #[test]
+    fn wrap_angle_range() {
+        assert!((wrap_angle(3.0 * PI) - PI).abs() < 1e-5);
+        assert!((wrap_angle(-3.0 * PI / 2.0) - FRAC_PI_2).abs() < 1e-5);
+        assert_eq!(wrap_angle(0.25), 0.25);
+    }
+}

@@ -1,0 +1,62 @@
+//! Zero-copy message types shared by every vpsom-rt process.
+//!
+//! Every payload here is `#[repr(C)]`, self-contained (no pointers, no heap, no `Drop`), of fixed
+//! capacity, and carries a stable iceoryx2 type name (`vpsom::<Name>`) so that producers and
+//! consumers built separately agree on the layout. Producers write a loaned sample in place;
+//! consumers read it in place. Logic beyond accessors and validation lives elsewhere.
+//!
+//! Conventions (all messages):
+//! - world frame: x forward/east, y left/north, z up, metres, floor at z = 0;
+//! - camera frame: OpenCV optical frame (x right, y down, z forward);
+//! - [`Pose3`] stores `parent_from_child` as a translation and a unit quaternion `[x, y, z, w]`;
+//! - angles are radians; times are nanoseconds.
+//!
+//! Every type implements [`Validate`], which rejects NaN/inf and out-of-range counts, and
+//! [`ZeroValid`], which states that all-zero bytes are a valid value (so a loaned sample can be
+//! zero-filled in place and then written field by field, and lockstep hosts can heap-allocate one
+//! with [`boxed_zeroed`] without building it on the stack).
+
+mod classes;
+mod messages;
+mod validate;
+
+pub use classes::{COCO_CLASSES, ClassId, class_id, class_name, is_background_class};
+pub use messages::*;
+pub use validate::{Validate, ValidationError};
+
+use iceoryx2::prelude::ZeroCopySend;
+
+/// Marker for payloads whose all-zero bit pattern is a valid value.
+///
+/// # Safety
+/// Implement only for `#[repr(C)]` types built from integers, floats, `bool`s and arrays/structs of
+/// such types (no references, no `NonZero*`, no enums with a niche at zero).
+pub unsafe trait ZeroValid: Sized + ZeroCopySend {}
+
+/// A heap-allocated, zero-initialised `T`, built without a stack temporary (a `DepthFrame` is
+/// ~1 MB). Used by in-process (lockstep) hosting and by tests.
+pub fn boxed_zeroed<T: ZeroValid>() -> Box<T> {
+    let layout = std::alloc::Layout::new::<T>();
+    assert!(layout.size() > 0, "zero-sized payloads are not messages");
+    // SAFETY: the layout is non-zero-sized (checked above); `ZeroValid` guarantees the all-zero
+    // bit pattern is a valid `T`, so the allocation is initialised; the pointer comes from the
+    // global allocator with `T`'s layout, which is what `Box::from_raw` requires.
+    unsafe {
+        let ptr = std::alloc::alloc_zeroed(layout) as *mut T;
+        if ptr.is_null() {
+            std::alloc::handle_alloc_error(layout);
+        }
+        Box::from_raw(ptr)
+    }
+}
+
+/// Overwrite `value` with all-zero bytes in place (used to reset a reused buffer or to initialise a
+/// loaned shared-memory sample without building a stack temporary).
+pub fn zero_in_place<T: ZeroValid>(value: &mut std::mem::MaybeUninit<T>) -> &mut T {
+    // SAFETY: `value` is a valid, exclusive, properly aligned place for one `T`; after writing
+    // zero bytes it holds a valid `T` because `T: ZeroValid`.
+    unsafe {
+        std::ptr::write_bytes(value.as_mut_ptr(), 0, 1);
+        value.assume_init_mut()
+    }
+}
