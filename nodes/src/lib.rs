@@ -6,6 +6,7 @@
 //! (a test in `tests/layering.rs` guards this).
 
 pub mod config;
+pub mod eval;
 pub mod geom;
 pub mod mapper;
 pub mod planner;

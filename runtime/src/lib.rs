@@ -2,6 +2,11 @@
 //! monitor, the low-priority worker pool, clocks, the MCAP recorder, and configuration loading.
 //! Nothing here knows about view planning; node logic lives in the `nodes` crate.
 
+pub mod clock;
 pub mod config;
+pub mod doctor;
 pub mod executor;
+mod os;
+pub mod pool;
 pub mod ports;
+pub mod recorder;

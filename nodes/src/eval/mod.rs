@@ -1,0 +1,1 @@
+//! Metrics, maps and plots of a session (placeholder).
