@@ -203,6 +203,11 @@ mod tests {
     }
 
     #[test]
+    fn valid_file_parses() {
+        assert_eq!(parse("[rate]\nhz = 10.0\n").unwrap().rate.hz, 10.0);
+    }
+
+    #[test]
     fn unknown_key_is_named_with_file_and_table() {
         let e = parse("[rate]\nhz = 10.0\nhzz = 3\n").unwrap_err();
         let msg = e.to_string();
