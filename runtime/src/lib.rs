@@ -6,6 +6,7 @@ pub mod clock;
 pub mod config;
 pub mod doctor;
 pub mod executor;
+pub mod launcher;
 mod os;
 pub mod pool;
 pub mod ports;
