@@ -805,7 +805,10 @@ impl Validate for PlannerDecision {
 // SAFETY (all impls below): each type is `#[repr(C)]` and made only of integers, floats and
 // arrays/structs thereof, for which the all-zero bit pattern is valid.
 macro_rules! zero_valid {
-    ($($t:ty),*) => { $(unsafe impl ZeroValid for $t {})* };
+    ($($t:ty),*) => { $(
+        // SAFETY: see the comment above the macro; `$t` is plain old data.
+        unsafe impl ZeroValid for $t {}
+    )* };
 }
 zero_valid!(
     Header,
