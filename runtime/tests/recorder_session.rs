@@ -299,3 +299,27 @@ fn dropping_the_recorder_finishes_the_file() {
     assert_eq!(inf.drops.unwrap().total_dropped(), 0);
     let _ = std::fs::remove_file(&path);
 }
+
+#[test]
+fn foxglove_layout_names_recorded_topics() {
+    let text = include_str!("../../config/foxglove-layout.json");
+    let v: serde_json::Value = serde_json::from_str(text).unwrap();
+    let cfg = v["configById"].as_object().unwrap();
+    assert!(cfg.keys().any(|k| k.starts_with("3D!")));
+    let img = cfg.iter().find(|(k, _)| k.starts_with("Image!")).unwrap().1;
+    assert_eq!(img["imageMode"]["imageTopic"], topic::DEPTH);
+    let plot = cfg.iter().find(|(k, _)| k.starts_with("Plot!")).unwrap().1;
+    let path = plot["paths"][0]["value"].as_str().unwrap();
+    assert!(
+        path.starts_with(topic::DEADLINE) && path.ends_with(".exec_ns"),
+        "{path}"
+    );
+    // Every topic the 3D panel names is one the recorder writes.
+    let known: Vec<&str> = runtime::recorder::schemas::channels()
+        .iter()
+        .map(|c| c.0)
+        .collect();
+    for t in cfg["3D!vpsom"]["topics"].as_object().unwrap().keys() {
+        assert!(known.contains(&t.as_str()), "{t}");
+    }
+}

@@ -991,10 +991,12 @@ mod tests {
             forward_offset: 0.25,
             ..Default::default()
         };
-        let mut s = RobotState::default();
-        s.base_pose = [1.0, -2.0, 0.5];
-        s.neck_yaw = 0.8;
-        s.neck_pitch = 0.45;
+        let s = RobotState {
+            base_pose: [1.0, -2.0, 0.5],
+            neck_yaw: 0.8,
+            neck_pitch: 0.45,
+            ..Default::default()
+        };
         let mut out = Vec::new();
         transforms(&s, &mount, false, &mut out);
         let v: serde_json::Value = serde_json::from_slice(&out).unwrap();

@@ -451,7 +451,6 @@ impl Shared {
 /// What travels through the channel to the writer thread.
 #[derive(Debug)]
 enum Msg {
-    DepthReady,
     State(RobotState),
     TrueState(RobotState),
     Map(Box<ObjectMap>),
@@ -527,6 +526,8 @@ pub struct RecorderSummary {
 #[derive(Debug, Clone)]
 pub struct RecorderHandle {
     tx: Sender<Msg>,
+    /// Capacity-1 wake-up for the writer when a depth frame is queued (never uses `tx` room).
+    wake: Sender<()>,
     shared: Arc<Shared>,
 }
 
@@ -574,8 +575,8 @@ impl RecorderHandle {
             s.counters.drop_one(Kind::Depth);
             s.depth_pool.give(old);
         }
-        // Wake the writer; if the channel is full it is busy and will find the frame anyway.
-        let _ = self.tx.try_send(Msg::DepthReady);
+        // Wake the writer; a pending wake-up already does.
+        let _ = self.wake.try_send(());
     }
 
     /// Record the estimated robot state (`/tf`, `/trajectory`).
@@ -683,6 +684,7 @@ impl Recorder {
         setup: RecorderSetup,
     ) -> Result<Recorder, RecorderError> {
         let (tx, rx): (Sender<Msg>, Receiver<Msg>) = crossbeam::channel::bounded(cfg.queue_len);
+        let (wake, wake_rx) = crossbeam::channel::bounded(1);
         let shared = Arc::new(Shared {
             counters: Counters::default(),
             depth_ready: ArrayQueue::new(cfg.depth_queue_len),
@@ -694,10 +696,10 @@ impl Recorder {
         let sh = Arc::clone(&shared);
         let thread = std::thread::Builder::new()
             .name("recorder".into())
-            .spawn(move || w.run(rx, sh))
+            .spawn(move || w.run(rx, wake_rx, sh))
             .map_err(RecorderError::Spawn)?;
         Ok(Recorder {
-            handle: RecorderHandle { tx, shared },
+            handle: RecorderHandle { tx, wake, shared },
             thread: Some(thread),
             path: path.to_path_buf(),
         })
@@ -739,5 +741,85 @@ impl Drop for Recorder {
         if let Err(e) = self.finish_inner() {
             eprintln!("recorder: {e}");
         }
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::config::parse_toml;
+
+    #[derive(Debug, Deserialize)]
+    struct Root {
+        recorder: RecorderConfig,
+    }
+
+    #[test]
+    fn shipped_section_equals_defaults_and_validates() {
+        let text = include_str!("../../../config/default.toml");
+        let root: Root = parse_toml(Path::new("config/default.toml"), text).unwrap();
+        assert_eq!(root.recorder, RecorderConfig::default());
+        root.recorder
+            .validate(&Checker::new("config/default.toml"))
+            .unwrap();
+    }
+
+    #[test]
+    fn bad_values_are_named() {
+        let f = Path::new("bad.toml");
+        let c = Checker::new("bad.toml");
+        let r: Root = parse_toml(f, "[recorder]\ndepth_decimation = 0\n").unwrap();
+        let e = r.recorder.validate(&c).unwrap_err();
+        assert_eq!(
+            e.to_string(),
+            "bad.toml: recorder.depth_decimation = 0: must be in [1, 16]"
+        );
+        let r: Root = parse_toml(f, "[recorder]\nflush_interval_s = 0.0\n").unwrap();
+        assert_eq!(
+            r.recorder.validate(&c).unwrap_err().key(),
+            "recorder.flush_interval_s"
+        );
+        let e = parse_toml::<Root>(f, "[recorder]\ncompression = \"gzip\"\n").unwrap_err();
+        assert_eq!(e.key(), "recorder.compression", "{e}");
+        let e = parse_toml::<Root>(f, "[recorder]\nqueue = 3\n").unwrap_err();
+        assert!(e.to_string().contains("unknown field `queue`"), "{e}");
+    }
+
+    #[test]
+    fn depth_ring_keeps_the_newest_frames_and_counts_the_replaced_ones() {
+        // No writer thread: the handle alone, so the ring's behaviour is exact.
+        let (tx, _rx) = crossbeam::channel::bounded(4);
+        let (wake, _wake_rx) = crossbeam::channel::bounded(1);
+        let shared = Arc::new(Shared {
+            counters: Counters::default(),
+            depth_ready: ArrayQueue::new(2),
+            depth_pool: Pool::new(3),
+            map_pool: Pool::new(1),
+            decision_pool: Pool::new(1),
+        });
+        let h = RecorderHandle {
+            tx,
+            wake,
+            shared: Arc::clone(&shared),
+        };
+        let mut f = boxed_zeroed::<DepthFrame>();
+        f.width = 2;
+        f.height = 2;
+        for seq in 1..=6 {
+            f.header.seq = seq;
+            h.record_depth(&f);
+        }
+        let kept: Vec<u64> = std::iter::from_fn(|| shared.depth_ready.pop())
+            .map(|b| b.header.seq)
+            .collect();
+        assert_eq!(kept, [5, 6]);
+        assert_eq!(h.dropped(Kind::Depth), 4);
+        assert_eq!(h.drops().offered[schemas::topic::DEPTH], 6);
+        // Pooled kinds: one box in the pool; the second map finds none and is dropped, counted.
+        let m = boxed_zeroed::<ObjectMap>();
+        h.record_map(&m);
+        h.record_map(&m);
+        assert_eq!(h.dropped(Kind::Map), 1);
+        assert_eq!(h.drops().offered[schemas::topic::MAP], 2);
     }
 }

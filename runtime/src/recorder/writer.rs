@@ -6,7 +6,7 @@ use super::{
     Compression, DropCounts, MountGeometry, Msg, RecorderConfig, RecorderError, RecorderSetup,
     RecorderSummary, Shared,
 };
-use crossbeam::channel::{Receiver, RecvTimeoutError, TryRecvError};
+use crossbeam::channel::{Receiver, TryRecvError};
 use mcap::records::{MessageHeader, Metadata};
 use serde::Serialize;
 use shm_types::{DepthFrame, RobotState, decision_kind};
@@ -252,7 +252,7 @@ impl WriterState {
     fn handle(&mut self, m: Msg, shared: &Shared) -> Result<(), RecorderError> {
         let mount = self.mount;
         match m {
-            Msg::DepthReady | Msg::Finish => {}
+            Msg::Finish => {}
             Msg::State(s) | Msg::TrueState(s) => {
                 let truth = matches!(m, Msg::TrueState(_));
                 let (t, p) = (s.header.sim_time_ns, s.header.stamp_ns);
@@ -400,17 +400,22 @@ impl WriterState {
     pub(super) fn run(
         mut self,
         rx: Receiver<Msg>,
+        wake: Receiver<()>,
         shared: Arc<Shared>,
     ) -> Result<RecorderSummary, RecorderError> {
         let drain_max = self.cfg.queue_len;
         'outer: loop {
             let first = if shared.depth_ready.is_empty() {
-                match rx.recv_timeout(self.next_tick()) {
-                    Ok(m) => Some(m),
-                    Err(RecvTimeoutError::Timeout) => None,
-                    Err(RecvTimeoutError::Disconnected) => break,
+                crossbeam::channel::select! {
+                    recv(rx) -> m => match m {
+                        Ok(m) => Some(m),
+                        Err(_) => break,
+                    },
+                    recv(wake) -> _ => None,
+                    default(self.next_tick()) => None,
                 }
             } else {
+                let _ = wake.try_recv();
                 None
             };
             if let Some(m) = first {

@@ -96,7 +96,7 @@ pub fn deadline(seq: u64) -> DeadlineEvent {
         budget_ns: 20_000_000,
         lateness_ns: -5 + seq as i64,
         exec_ns: 1_000_000 + seq * 10,
-        missed: u8::from(seq % 10 == 0),
+        missed: u8::from(seq.is_multiple_of(10)),
         ..Default::default()
     };
     e.set_thread_name("lbv");
