@@ -35,6 +35,8 @@ pub struct Config {
     pub mapper: crate::mapper::MapperConfig,
     /// View planning (VP-SOM and baselines).
     pub planner: crate::planner::PlannerConfig,
+    /// MCAP recorder.
+    pub recorder: runtime::recorder::RecorderConfig,
 }
 
 /// The RGB-D camera (paper: Kinect v2 on the FABO robot's head).
@@ -202,7 +204,8 @@ impl Config {
         self.detector.validate(&c)?;
         self.robot.validate(&c)?;
         self.mapper.validate(&c)?;
-        self.planner.validate(&c)
+        self.planner.validate(&c)?;
+        self.recorder.validate(&c)
     }
 }
 

@@ -1,0 +1,478 @@
+//! Reading traces back: [`info`] (topics, counts, time range, drops) and [`export_csv`] for the
+//! JSON channels. Both stream the file with constant memory and accept a file cut short by a
+//! crash (they read up to the last complete record and report the truncation).
+
+use super::schemas::{STATS_METADATA, topic};
+use super::{DropCounts, RecorderError};
+use mcap::records::Record;
+use mcap::sans_io::linear_reader::{LinearReadEvent, LinearReader, LinearReaderOptions};
+use std::collections::{BTreeMap, HashMap};
+use std::fmt;
+use std::io::{Read, Write};
+use std::path::{Path, PathBuf};
+
+/// One record of interest met while scanning a file.
+#[derive(Debug)]
+pub enum Item<'a> {
+    /// A schema.
+    Schema {
+        /// Schema id.
+        id: u16,
+        /// Schema name.
+        name: &'a str,
+        /// Schema encoding (`jsonschema` for all of ours).
+        encoding: &'a str,
+        /// Schema text.
+        data: &'a [u8],
+    },
+    /// A channel definition.
+    Channel {
+        /// Channel id.
+        id: u16,
+        /// Topic.
+        topic: &'a str,
+        /// Message encoding (`json` for all of ours).
+        encoding: &'a str,
+        /// Schema id (0 = none).
+        schema_id: u16,
+        /// Schema name (empty if none).
+        schema: &'a str,
+    },
+    /// A message.
+    Message {
+        /// Channel id.
+        channel: u16,
+        /// Log time, ns.
+        log_time: u64,
+        /// Payload.
+        data: &'a [u8],
+    },
+    /// A metadata record.
+    Metadata {
+        /// Record name.
+        name: &'a str,
+        /// Key-value pairs.
+        values: &'a BTreeMap<String, String>,
+    },
+}
+
+/// How a scan ended.
+#[derive(Debug, Clone, PartialEq, Eq)]
+pub struct ScanEnd {
+    /// The file ended with a footer and end magic (it was finished).
+    pub complete: bool,
+    /// Why reading stopped early (a crash leaves a partial chunk), if it did.
+    pub truncation: Option<String>,
+}
+
+fn read_err(path: &Path, message: impl Into<String>) -> RecorderError {
+    RecorderError::Read {
+        path: path.to_path_buf(),
+        message: message.into(),
+    }
+}
+
+/// Stream every record of `path` through `f`, validating chunk CRCs. A file cut short (crash)
+/// yields everything up to its last complete chunk and `ScanEnd { complete: false, .. }`; a file
+/// that is not MCAP at all is an error.
+pub fn scan(path: &Path, mut f: impl FnMut(Item<'_>)) -> Result<ScanEnd, RecorderError> {
+    let mut file =
+        std::fs::File::open(path).map_err(|e| read_err(path, format!("cannot open: {e}")))?;
+    let mut reader = LinearReader::new_with_options(
+        LinearReaderOptions::default()
+            .with_skip_end_magic(false)
+            .with_validate_chunk_crcs(true)
+            .with_prevalidate_chunk_crcs(true),
+    );
+    let mut schemas: HashMap<u16, String> = HashMap::new();
+    let mut records = 0u64;
+    let mut complete = false;
+    while let Some(event) = reader.next_event() {
+        let event = match event {
+            Ok(e) => e,
+            Err(e) if records == 0 => return Err(read_err(path, format!("not an MCAP file: {e}"))),
+            Err(e) => {
+                return Ok(ScanEnd {
+                    complete: false,
+                    truncation: Some(format!("stopped after {records} records: {e}")),
+                });
+            }
+        };
+        match event {
+            LinearReadEvent::ReadRequest(need) => {
+                let n = file
+                    .read(reader.insert(need))
+                    .map_err(|e| read_err(path, format!("read failed: {e}")))?;
+                reader.notify_read(n);
+            }
+            LinearReadEvent::Record { opcode, data } => {
+                records += 1;
+                let rec = match mcap::parse_record(opcode, data) {
+                    Ok(r) => r,
+                    Err(e) => {
+                        return Ok(ScanEnd {
+                            complete: false,
+                            truncation: Some(format!("bad record after {records} records: {e}")),
+                        });
+                    }
+                };
+                match rec {
+                    Record::Schema { header, data } => {
+                        f(Item::Schema {
+                            id: header.id,
+                            name: &header.name,
+                            encoding: &header.encoding,
+                            data: &data,
+                        });
+                        schemas.insert(header.id, header.name);
+                    }
+                    Record::Channel(c) => f(Item::Channel {
+                        id: c.id,
+                        topic: &c.topic,
+                        encoding: &c.message_encoding,
+                        schema_id: c.schema_id,
+                        schema: schemas.get(&c.schema_id).map_or("", String::as_str),
+                    }),
+                    Record::Message { header, data } => f(Item::Message {
+                        channel: header.channel_id,
+                        log_time: header.log_time,
+                        data: &data,
+                    }),
+                    Record::Metadata(m) => f(Item::Metadata {
+                        name: &m.name,
+                        values: &m.metadata,
+                    }),
+                    Record::Footer(_) => complete = true,
+                    _ => {}
+                }
+            }
+        }
+    }
+    Ok(ScanEnd {
+        complete,
+        truncation: None,
+    })
+}
+
+/// One topic of a trace.
+#[derive(Debug, Clone, PartialEq, Eq)]
+pub struct TopicInfo {
+    /// Topic name.
+    pub topic: String,
+    /// Schema name.
+    pub schema: String,
+    /// Message encoding.
+    pub encoding: String,
+    /// Messages read.
+    pub messages: u64,
+    /// Log time of the earliest message, ns.
+    pub first_ns: Option<u64>,
+    /// Log time of the latest message, ns.
+    pub last_ns: Option<u64>,
+}
+
+/// Summary of a trace file.
+#[derive(Debug, Clone, PartialEq)]
+pub struct TraceInfo {
+    /// The file.
+    pub path: PathBuf,
+    /// Scan outcome (finished file or crash-truncated).
+    pub end: ScanEnd,
+    /// Topics in channel order.
+    pub topics: Vec<TopicInfo>,
+    /// Earliest log time, ns.
+    pub start_ns: Option<u64>,
+    /// Latest log time, ns.
+    pub end_ns: Option<u64>,
+    /// Drop counts: from the final `recorder_stats` metadata if present, else the newest
+    /// `/recorder/stats` message.
+    pub drops: Option<DropCounts>,
+    /// Metadata records by name.
+    pub metadata: BTreeMap<String, BTreeMap<String, String>>,
+}
+
+impl TraceInfo {
+    /// Messages on `topic` (0 if absent).
+    pub fn count(&self, topic: &str) -> u64 {
+        self.topics
+            .iter()
+            .find(|t| t.topic == topic)
+            .map_or(0, |t| t.messages)
+    }
+}
+
+fn drops_from_metadata(m: &BTreeMap<String, String>) -> DropCounts {
+    let mut d = DropCounts::default();
+    for (k, v) in m {
+        let n = v.parse().unwrap_or(0);
+        if let Some(t) = k.strip_prefix("offered:") {
+            d.offered.insert(t.to_string(), n);
+        } else if let Some(t) = k.strip_prefix("dropped:") {
+            d.dropped.insert(t.to_string(), n);
+        }
+    }
+    d
+}
+
+/// Topics, message counts, time range and drop counts of a trace (finished or crash-truncated).
+pub fn info(path: &Path) -> Result<TraceInfo, RecorderError> {
+    let mut topics: Vec<TopicInfo> = Vec::new();
+    let mut by_id: HashMap<u16, usize> = HashMap::new();
+    let mut metadata = BTreeMap::new();
+    let mut last_stats: Option<Vec<u8>> = None;
+    let end = scan(path, |item| match item {
+        Item::Channel {
+            id,
+            topic,
+            encoding,
+            schema,
+            ..
+        } => {
+            let i = match topics.iter().position(|t| t.topic == topic) {
+                Some(i) => i,
+                None => {
+                    topics.push(TopicInfo {
+                        topic: topic.to_string(),
+                        schema: schema.to_string(),
+                        encoding: encoding.to_string(),
+                        messages: 0,
+                        first_ns: None,
+                        last_ns: None,
+                    });
+                    topics.len() - 1
+                }
+            };
+            by_id.insert(id, i);
+        }
+        Item::Message {
+            channel,
+            log_time,
+            data,
+        } => {
+            if let Some(&i) = by_id.get(&channel) {
+                let t = &mut topics[i];
+                t.messages += 1;
+                t.first_ns = Some(t.first_ns.map_or(log_time, |f| f.min(log_time)));
+                t.last_ns = Some(t.last_ns.map_or(log_time, |l| l.max(log_time)));
+                if t.topic == topic::STATS {
+                    last_stats = Some(data.to_vec());
+                }
+            }
+        }
+        Item::Metadata { name, values } => {
+            metadata.insert(name.to_string(), values.clone());
+        }
+        Item::Schema { .. } => {}
+    })?;
+    let drops = match metadata.get(STATS_METADATA) {
+        Some(m) => Some(drops_from_metadata(m)),
+        None => last_stats.and_then(|d| {
+            let v: serde_json::Value = serde_json::from_slice(&d).ok()?;
+            Some(DropCounts {
+                offered: serde_json::from_value(v.get("offered")?.clone()).ok()?,
+                dropped: serde_json::from_value(v.get("dropped")?.clone()).ok()?,
+            })
+        }),
+    };
+    let start_ns = topics.iter().filter_map(|t| t.first_ns).min();
+    let end_ns = topics.iter().filter_map(|t| t.last_ns).max();
+    Ok(TraceInfo {
+        path: path.to_path_buf(),
+        end,
+        topics,
+        start_ns,
+        end_ns,
+        drops,
+        metadata,
+    })
+}
+
+fn secs(ns: Option<u64>) -> String {
+    ns.map_or("-".into(), |n| format!("{:.3}", n as f64 * 1e-9))
+}
+
+impl fmt::Display for TraceInfo {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        writeln!(f, "file:     {}", self.path.display())?;
+        match (&self.end.truncation, self.end.complete) {
+            (None, true) => writeln!(f, "status:   finished")?,
+            (None, false) => writeln!(f, "status:   no footer (not finished)")?,
+            (Some(t), _) => writeln!(f, "status:   truncated ({t})")?,
+        }
+        let dur = match (self.start_ns, self.end_ns) {
+            (Some(a), Some(b)) => format!(" ({:.3} s)", (b - a) as f64 * 1e-9),
+            _ => String::new(),
+        };
+        writeln!(
+            f,
+            "time:     {} .. {} s{dur}",
+            secs(self.start_ns),
+            secs(self.end_ns)
+        )?;
+        if let Some(s) = self.metadata.get(super::schemas::SESSION_METADATA)
+            && let Some(scene) = s.get("scene")
+        {
+            writeln!(f, "scene:    {scene}")?;
+        }
+        writeln!(
+            f,
+            "{:<22} {:>9} {:>10} {:>10} {:>8}  schema",
+            "topic", "messages", "first s", "last s", "dropped"
+        )?;
+        for t in &self.topics {
+            let dropped = self
+                .drops
+                .as_ref()
+                .and_then(|d| d.dropped.get(&t.topic))
+                .map_or("-".to_string(), u64::to_string);
+            writeln!(
+                f,
+                "{:<22} {:>9} {:>10} {:>10} {:>8}  {}",
+                t.topic,
+                t.messages,
+                secs(t.first_ns),
+                secs(t.last_ns),
+                dropped,
+                t.schema
+            )?;
+        }
+        match &self.drops {
+            Some(d) => write!(f, "dropped total: {}", d.total_dropped()),
+            None => write!(f, "dropped total: unknown (no recorder stats in file)"),
+        }
+    }
+}
+
+fn csv_field(s: &str) -> String {
+    if s.contains([',', '"', '\n', '\r']) {
+        format!("\"{}\"", s.replace('"', "\"\""))
+    } else {
+        s.to_string()
+    }
+}
+
+fn scalar(v: &serde_json::Value) -> String {
+    match v {
+        serde_json::Value::Null => String::new(),
+        serde_json::Value::String(s) => s.clone(),
+        other => other.to_string(),
+    }
+}
+
+/// Columns of one message: top-level keys, and the keys of top-level objects one level down
+/// (`key.sub`); arrays and deeper objects stay JSON text.
+fn flatten(v: &serde_json::Value) -> Vec<(String, String)> {
+    let mut out = Vec::new();
+    match v {
+        serde_json::Value::Object(m) => {
+            for (k, x) in m {
+                match x {
+                    serde_json::Value::Object(sub) => {
+                        for (k2, y) in sub {
+                            out.push((format!("{k}.{k2}"), scalar(y)));
+                        }
+                    }
+                    _ => out.push((k.clone(), scalar(x))),
+                }
+            }
+        }
+        other => out.push(("value".into(), scalar(other))),
+    }
+    out
+}
+
+/// Write the JSON messages of `topic` as CSV (`log_time_ns` then one column per flattened key,
+/// in first-seen order). Returns the number of rows. Two streaming passes, constant memory.
+pub fn export_csv(path: &Path, topic: &str, out: &mut dyn Write) -> Result<u64, RecorderError> {
+    let mut ids = Vec::new();
+    let mut encoding = None;
+    let mut topics = Vec::new();
+    let mut columns: Vec<String> = Vec::new();
+    let mut col_index: HashMap<String, usize> = HashMap::new();
+    let mut bad: Option<String> = None;
+    scan(path, |item| match item {
+        Item::Channel {
+            id,
+            topic: t,
+            encoding: e,
+            ..
+        } => {
+            topics.push(t.to_string());
+            if t == topic {
+                ids.push(id);
+                encoding = Some(e.to_string());
+            }
+        }
+        Item::Message { channel, data, .. } if ids.contains(&channel) => {
+            match serde_json::from_slice::<serde_json::Value>(data) {
+                Ok(v) => {
+                    for (k, _) in flatten(&v) {
+                        if !col_index.contains_key(&k) {
+                            col_index.insert(k.clone(), columns.len());
+                            columns.push(k);
+                        }
+                    }
+                }
+                Err(e) => {
+                    bad.get_or_insert(format!("message is not JSON: {e}"));
+                }
+            }
+        }
+        _ => {}
+    })?;
+    match encoding.as_deref() {
+        None => {
+            topics.dedup();
+            return Err(read_err(
+                path,
+                format!("no topic {topic}; topics: {}", topics.join(", ")),
+            ));
+        }
+        Some("json") => {}
+        Some(e) => {
+            return Err(read_err(
+                path,
+                format!("{topic} has message encoding {e:?}, CSV export needs \"json\""),
+            ));
+        }
+    }
+    if let Some(b) = bad {
+        return Err(read_err(path, format!("{topic}: {b}")));
+    }
+    let io = |e: std::io::Error| read_err(path, format!("cannot write CSV: {e}"));
+    let header: Vec<String> = std::iter::once("log_time_ns".to_string())
+        .chain(columns.iter().map(|c| csv_field(c)))
+        .collect();
+    writeln!(out, "{}", header.join(",")).map_err(io)?;
+    let mut rows = 0u64;
+    let mut failed = None;
+    let mut row = vec![String::new(); columns.len()];
+    scan(path, |item| {
+        if let Item::Message {
+            channel,
+            log_time,
+            data,
+        } = item
+            && ids.contains(&channel)
+            && failed.is_none()
+        {
+            let Ok(v) = serde_json::from_slice::<serde_json::Value>(data) else {
+                return;
+            };
+            row.iter_mut().for_each(String::clear);
+            for (k, x) in flatten(&v) {
+                if let Some(&i) = col_index.get(&k) {
+                    row[i] = csv_field(&x);
+                }
+            }
+            if let Err(e) = writeln!(out, "{log_time},{}", row.join(",")) {
+                failed = Some(e);
+            }
+            rows += 1;
+        }
+    })?;
+    if let Some(e) = failed {
+        return Err(io(e));
+    }
+    Ok(rows)
+}

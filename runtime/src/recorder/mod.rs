@@ -1,0 +1,825 @@
+//! The MCAP recorder: every topic of a session into one file that Foxglove and any MCAP tool can
+//! open.
+//!
+//! # Threading
+//! [`Recorder::create`] opens the file and starts one named writer thread (`recorder`) that owns
+//! the [`mcap::Writer`]. Producers hold a cloneable [`RecorderHandle`] whose `record_*` methods
+//! never block and never allocate for the real-time kinds (state, goals, deadline events, planner
+//! decisions): small messages are copied by value into a bounded crossbeam channel; large ones
+//! (`DepthFrame`, `ObjectMap`, `PlannerDecision`) are copied into preallocated boxes taken from a
+//! pool. Conversion to the on-disk format happens on the writer thread.
+//!
+//! # Falling behind
+//! Depth frames do not go through the channel: they wait in a small ring of
+//! `recorder.depth_queue_len` slots where a new frame replaces the *oldest* queued one, and the
+//! writer serves every other message before the next depth frame, so depth is what is lost first.
+//! Any other message is dropped only if the channel or its pool is full. Every drop is counted
+//! per topic ([`RecorderHandle::dropped`]) and written into the file: periodically on
+//! `/recorder/stats` and at finish as the MCAP Metadata record `recorder_stats`.
+//!
+//! # Crash safety
+//! Chunks are bounded by size (`chunk_size_kb`) and by age (`flush_interval_s`): the writer
+//! finishes and flushes a chunk once it is older than the interval, so after SIGKILL everything up
+//! to the last completed chunk reads back (`inspect` reads truncated files). On SIGINT/SIGTERM
+//! the host calls [`Recorder::finish`]; dropping the [`Recorder`] finishes the file too.
+//!
+//! # Encoding: JSON + JSON Schema for everything, also the Foxglove well-known schemas
+//! Every channel uses message encoding `json` and schema encoding `jsonschema`. For the Foxglove
+//! well-known types the schema is named `foxglove.<Type>` (Foxglove recognises the type by name;
+//! `bytes` fields are base64 strings), see [`schemas`]. Chosen over the `foxglove` crate's
+//! protobuf schemas because: (1) no extra dependency tree (prost, tracing, parking_lot, …, ~46 s of
+//! build on every clean CI run); (2) any MCAP tool (`mcap cat --json`, Python `mcap`) decodes every
+//! channel without a protobuf runtime; (3) each message is checked against a real schema in the
+//! tests (a JSON Schema validation is a stronger check than a protobuf decode, which accepts
+//! almost any bytes). The cost is size: base64 depth is 4/3 of the raw bytes before compression
+//! (measured in `examples/recorder_load.rs`).
+//!
+//! # Topics
+//! | topic | schema | from |
+//! |---|---|---|
+//! | `/camera/depth` | `foxglove.RawImage` (`16UC1`, decimated) | [`RecorderHandle::record_depth`] |
+//! | `/tf` | `foxglove.FrameTransforms` world→base→neck→camera | [`RecorderHandle::record_state`] |
+//! | `/trajectory` | `foxglove.PosesInFrame` (estimated base) | state, at `trajectory_hz` |
+//! | `/truth/tf`, `/truth/trajectory` | same, frame `base_true` | [`RecorderHandle::record_true_state`] |
+//! | `/truth/objects` | `foxglove.SceneUpdate` | [`RecorderSetup::truth`] |
+//! | `/map/objects` | `foxglove.SceneUpdate` | [`RecorderHandle::record_map`] |
+//! | `/planner/gbv`, `/planner/lbv` | `foxglove.SceneUpdate` frusta | [`RecorderHandle::record_decision`] |
+//! | `/planner/decisions` | `vpsom.PlannerDecision` | same |
+//! | `/planner/nav_goal`, `/planner/neck_goal` | `vpsom.NavGoal`, `vpsom.NeckGoal` | `record_*_goal` |
+//! | `/runtime/deadline` | `vpsom.DeadlineEvent` | [`RecorderHandle::record_deadline`] |
+//! | `/runtime/latency` | `vpsom.LatencySummary` | [`RecorderHandle::record_latency`] |
+//! | `/log` | `foxglove.Log` | [`RecorderHandle::log`] |
+//! | `/metrics` | `vpsom.Metrics` | [`RecorderHandle::record_metrics`] |
+//! | `/recorder/stats` | `vpsom.RecorderStats` | the writer, every `stats_interval_s` |
+//!
+//! Log time of a message is its simulated/robot time (`header.sim_time_ns`), publish time its
+//! monotonic stamp (`header.stamp_ns`), so lockstep and deployment traces share one time base.
+//! `config/foxglove-layout.json` is a Foxglove layout for these topics (3D, depth, LBV exec time).
+
+mod convert;
+pub mod inspect;
+pub mod schemas;
+mod writer;
+
+use crate::config::{Checker, ConfigError};
+use crossbeam::channel::{Receiver, Sender, TrySendError};
+use crossbeam::queue::ArrayQueue;
+use serde::{Deserialize, Serialize};
+use shm_types::{
+    DeadlineEvent, DepthFrame, NavGoal, NeckGoal, ObjectMap, PlannerDecision, RobotState,
+    ZeroValid, boxed_zeroed,
+};
+use std::path::{Path, PathBuf};
+use std::sync::Arc;
+use std::sync::atomic::{AtomicU64, Ordering};
+use std::thread::JoinHandle;
+
+/// Chunk compression.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Deserialize)]
+#[serde(rename_all = "lowercase")]
+pub enum Compression {
+    /// zstd (best ratio; the default).
+    Zstd,
+    /// lz4 (fastest).
+    Lz4,
+    /// Uncompressed chunks.
+    None,
+}
+
+/// `[recorder]` section.
+#[derive(Debug, Clone, PartialEq, Deserialize)]
+#[serde(deny_unknown_fields, default)]
+pub struct RecorderConfig {
+    /// Chunk compression: "zstd", "lz4" or "none".
+    pub compression: Compression,
+    /// Compression level (0 = the codec's default).
+    pub compression_level: u32,
+    /// Target uncompressed chunk size, KiB.
+    pub chunk_size_kb: u64,
+    /// A chunk older than this is finished and flushed (bounds the loss after SIGKILL), seconds.
+    pub flush_interval_s: f64,
+    /// Capacity of the channel from producers to the writer thread (messages).
+    pub queue_len: usize,
+    /// Depth frames waiting for the writer; a new frame replaces the oldest when full.
+    pub depth_queue_len: usize,
+    /// Preallocated copies each of `ObjectMap` and `PlannerDecision` in flight.
+    pub pool_len: usize,
+    /// Depth images are decimated by this factor in each direction (1 = full resolution).
+    pub depth_decimation: u32,
+    /// Period of the `/recorder/stats` messages, seconds.
+    pub stats_interval_s: f64,
+    /// Rate of the `/trajectory` messages (simulated time), Hz.
+    pub trajectory_hz: f64,
+    /// Most poses kept in a trajectory message (older ones are thinned by 2 when exceeded).
+    pub trajectory_max_poses: usize,
+    /// Length of the drawn candidate-view frusta, metres.
+    pub frustum_length_m: f64,
+}
+
+impl Default for RecorderConfig {
+    fn default() -> Self {
+        Self {
+            compression: Compression::Zstd,
+            compression_level: 1,
+            chunk_size_kb: 1024,
+            flush_interval_s: 1.0,
+            queue_len: 512,
+            depth_queue_len: 3,
+            pool_len: 8,
+            depth_decimation: 2,
+            stats_interval_s: 1.0,
+            trajectory_hz: 2.0,
+            trajectory_max_poses: 2000,
+            frustum_length_m: 0.5,
+        }
+    }
+}
+
+impl RecorderConfig {
+    /// Range-check.
+    pub fn validate(&self, c: &Checker) -> Result<(), ConfigError> {
+        c.count(
+            "recorder.compression_level",
+            self.compression_level as usize,
+            0,
+            19,
+        )?;
+        c.count(
+            "recorder.chunk_size_kb",
+            self.chunk_size_kb as usize,
+            16,
+            64 * 1024,
+        )?;
+        c.in_range(
+            "recorder.flush_interval_s",
+            self.flush_interval_s,
+            0.05,
+            10.0,
+        )?;
+        c.count("recorder.queue_len", self.queue_len, 16, 1 << 20)?;
+        c.count("recorder.depth_queue_len", self.depth_queue_len, 1, 64)?;
+        c.count("recorder.pool_len", self.pool_len, 1, 256)?;
+        c.count(
+            "recorder.depth_decimation",
+            self.depth_decimation as usize,
+            1,
+            16,
+        )?;
+        c.in_range(
+            "recorder.stats_interval_s",
+            self.stats_interval_s,
+            0.05,
+            60.0,
+        )?;
+        c.in_range("recorder.trajectory_hz", self.trajectory_hz, 0.01, 100.0)?;
+        c.count(
+            "recorder.trajectory_max_poses",
+            self.trajectory_max_poses,
+            2,
+            1_000_000,
+        )?;
+        c.in_range(
+            "recorder.frustum_length_m",
+            self.frustum_length_m,
+            0.01,
+            10.0,
+        )
+    }
+}
+
+/// A ground-truth object for `/truth/objects` (given once at start).
+#[derive(Debug, Clone, PartialEq, Serialize)]
+pub struct TruthBox {
+    /// Unique name in the scene.
+    pub name: String,
+    /// COCO class name.
+    pub class: String,
+    /// Centre, world frame, metres.
+    pub center: [f32; 3],
+    /// Extent along the object's x, y, z, metres.
+    pub size: [f32; 3],
+    /// Yaw about +z, radians.
+    pub yaw: f32,
+}
+
+/// Where the camera sits on the robot (the static part of world→base→neck→camera).
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct MountGeometry {
+    /// Height of the camera above the floor, metres.
+    pub height: f32,
+    /// Offset of the neck axis ahead of the base centre, metres.
+    pub forward_offset: f32,
+    /// Horizontal field of view, degrees (for the drawn frusta).
+    pub hfov_deg: f32,
+    /// Vertical field of view, degrees.
+    pub vfov_deg: f32,
+}
+
+impl Default for MountGeometry {
+    fn default() -> Self {
+        Self {
+            height: 1.4,
+            forward_offset: 0.0,
+            hfov_deg: 60.0,
+            vfov_deg: 46.8,
+        }
+    }
+}
+
+/// Static facts about the session, written once at start.
+#[derive(Debug, Clone, Default, PartialEq)]
+pub struct RecorderSetup {
+    /// Scene name (MCAP metadata `session`).
+    pub scene: String,
+    /// Camera mount.
+    pub mount: MountGeometry,
+    /// Ground-truth objects (empty in deployment on a real robot).
+    pub truth: Vec<TruthBox>,
+}
+
+/// Latency of one node or path over the last summary period.
+#[derive(Debug, Clone, Default, PartialEq, Serialize)]
+pub struct NodeLatency {
+    /// Node or path name, e.g. `lbv` or `frame->map`.
+    pub node: String,
+    /// Samples in the period.
+    pub count: u64,
+    /// Minimum, ns.
+    pub min_ns: u64,
+    /// Median, ns.
+    pub p50_ns: u64,
+    /// 90th percentile, ns.
+    pub p90_ns: u64,
+    /// 99th percentile, ns.
+    pub p99_ns: u64,
+    /// Maximum, ns.
+    pub max_ns: u64,
+    /// Mean, ns.
+    pub mean_ns: f64,
+}
+
+impl NodeLatency {
+    /// Summary of an hdrhistogram of nanosecond samples.
+    pub fn from_histogram(node: &str, h: &hdrhistogram::Histogram<u64>) -> Self {
+        Self {
+            node: node.to_string(),
+            count: h.len(),
+            min_ns: if h.is_empty() { 0 } else { h.min() },
+            p50_ns: h.value_at_quantile(0.5),
+            p90_ns: h.value_at_quantile(0.9),
+            p99_ns: h.value_at_quantile(0.99),
+            max_ns: h.max(),
+            mean_ns: if h.is_empty() { 0.0 } else { h.mean() },
+        }
+    }
+}
+
+/// A per-period latency summary of every node (`/runtime/latency`, ~1 Hz).
+#[derive(Debug, Clone, Default, PartialEq, Serialize)]
+pub struct LatencySummary {
+    /// Simulated/robot time at the end of the period, ns.
+    pub time_ns: u64,
+    /// Length of the period, ns.
+    pub period_ns: u64,
+    /// One entry per node or path.
+    pub nodes: Vec<NodeLatency>,
+}
+
+/// Severity of a `/log` line (values of `foxglove.Log.level`).
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+#[repr(u8)]
+pub enum LogLevel {
+    /// Debug.
+    Debug = 1,
+    /// Info.
+    Info = 2,
+    /// Warning.
+    Warning = 3,
+    /// Error.
+    Error = 4,
+    /// Fatal.
+    Fatal = 5,
+}
+
+/// Kinds of recorded input; each has one primary topic under which its drops are counted.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum Kind {
+    /// Depth frames.
+    Depth = 0,
+    /// Estimated robot state.
+    State,
+    /// True robot state.
+    TrueState,
+    /// Object maps.
+    Map,
+    /// Planner decisions.
+    Decision,
+    /// Navigation goals.
+    NavGoal,
+    /// Neck goals.
+    NeckGoal,
+    /// Deadline-monitor events.
+    Deadline,
+    /// Latency summaries.
+    Latency,
+    /// Log lines.
+    Log,
+    /// Final metrics.
+    Metrics,
+}
+
+impl Kind {
+    /// Every kind, in index order.
+    pub const ALL: [Kind; 11] = [
+        Kind::Depth,
+        Kind::State,
+        Kind::TrueState,
+        Kind::Map,
+        Kind::Decision,
+        Kind::NavGoal,
+        Kind::NeckGoal,
+        Kind::Deadline,
+        Kind::Latency,
+        Kind::Log,
+        Kind::Metrics,
+    ];
+
+    /// The topic that carries exactly one message per accepted input of this kind.
+    pub fn topic(self) -> &'static str {
+        use schemas::topic;
+        match self {
+            Kind::Depth => topic::DEPTH,
+            Kind::State => topic::TF,
+            Kind::TrueState => topic::TRUTH_TF,
+            Kind::Map => topic::MAP,
+            Kind::Decision => topic::DECISIONS,
+            Kind::NavGoal => topic::NAV_GOAL,
+            Kind::NeckGoal => topic::NECK_GOAL,
+            Kind::Deadline => topic::DEADLINE,
+            Kind::Latency => topic::LATENCY,
+            Kind::Log => topic::LOG,
+            Kind::Metrics => topic::METRICS,
+        }
+    }
+}
+
+const KINDS: usize = Kind::ALL.len();
+
+/// Counters shared by the handles and the writer.
+#[derive(Debug, Default)]
+struct Counters {
+    offered: [AtomicU64; KINDS],
+    dropped: [AtomicU64; KINDS],
+}
+
+impl Counters {
+    fn offer(&self, k: Kind) {
+        self.offered[k as usize].fetch_add(1, Ordering::Relaxed);
+    }
+    fn drop_one(&self, k: Kind) {
+        self.dropped[k as usize].fetch_add(1, Ordering::Relaxed);
+    }
+}
+
+/// Messages counted per topic: offered to the recorder and dropped by it.
+#[derive(Debug, Clone, Default, PartialEq, Eq, Serialize, Deserialize)]
+pub struct DropCounts {
+    /// Inputs offered per primary topic.
+    pub offered: std::collections::BTreeMap<String, u64>,
+    /// Inputs dropped per primary topic (never written).
+    pub dropped: std::collections::BTreeMap<String, u64>,
+}
+
+impl DropCounts {
+    /// Sum of all drops.
+    pub fn total_dropped(&self) -> u64 {
+        self.dropped.values().sum()
+    }
+}
+
+/// A fixed set of preallocated boxes.
+#[derive(Debug)]
+struct Pool<T> {
+    free: ArrayQueue<Box<T>>,
+}
+
+impl<T: ZeroValid> Pool<T> {
+    fn new(n: usize) -> Self {
+        let free = ArrayQueue::new(n);
+        for _ in 0..n {
+            // Cannot fail: the queue has exactly n slots.
+            let _ = free.push(boxed_zeroed::<T>());
+        }
+        Self { free }
+    }
+    fn take(&self) -> Option<Box<T>> {
+        self.free.pop()
+    }
+    fn give(&self, b: Box<T>) {
+        // The pool never holds more than it was built with, so this cannot be full; if it ever
+        // were, the box is simply freed.
+        let _ = self.free.push(b);
+    }
+}
+
+/// State shared by the handles and the writer thread.
+#[derive(Debug)]
+struct Shared {
+    counters: Counters,
+    depth_ready: ArrayQueue<Box<DepthFrame>>,
+    depth_pool: Pool<DepthFrame>,
+    map_pool: Pool<ObjectMap>,
+    decision_pool: Pool<PlannerDecision>,
+}
+
+impl Shared {
+    fn drop_counts(&self) -> DropCounts {
+        let mut d = DropCounts::default();
+        for k in Kind::ALL {
+            let t = k.topic().to_string();
+            d.offered.insert(
+                t.clone(),
+                self.counters.offered[k as usize].load(Ordering::Relaxed),
+            );
+            d.dropped
+                .insert(t, self.counters.dropped[k as usize].load(Ordering::Relaxed));
+        }
+        d
+    }
+}
+
+/// What travels through the channel to the writer thread.
+#[derive(Debug)]
+enum Msg {
+    State(RobotState),
+    TrueState(RobotState),
+    Map(Box<ObjectMap>),
+    Decision(Box<PlannerDecision>),
+    NavGoal(NavGoal),
+    NeckGoal(NeckGoal),
+    Deadline(DeadlineEvent),
+    Latency(LatencySummary),
+    Log {
+        time_ns: u64,
+        level: LogLevel,
+        name: String,
+        text: String,
+    },
+    Metrics {
+        time_ns: u64,
+        value: serde_json::Value,
+    },
+    Finish,
+}
+
+/// Errors of the recorder.
+#[derive(Debug, thiserror::Error)]
+pub enum RecorderError {
+    /// The output file could not be created.
+    #[error("{path}: cannot create recording: {source}")]
+    Create {
+        /// The file.
+        path: PathBuf,
+        /// Cause.
+        source: std::io::Error,
+    },
+    /// The MCAP writer failed (disk full, I/O error).
+    #[error("{path}: MCAP write failed: {source}")]
+    Mcap {
+        /// The file.
+        path: PathBuf,
+        /// Cause.
+        source: mcap::McapError,
+    },
+    /// The writer thread could not be started.
+    #[error("cannot start the recorder thread: {0}")]
+    Spawn(std::io::Error),
+    /// The writer thread panicked.
+    #[error("{path}: the recorder thread panicked")]
+    Panicked {
+        /// The file.
+        path: PathBuf,
+    },
+    /// A trace file could not be read.
+    #[error("{path}: {message}")]
+    Read {
+        /// The file.
+        path: PathBuf,
+        /// What went wrong.
+        message: String,
+    },
+}
+
+/// What a finished recording contains.
+#[derive(Debug, Clone, Default, PartialEq)]
+pub struct RecorderSummary {
+    /// Messages written per topic.
+    pub written: std::collections::BTreeMap<String, u64>,
+    /// Offered and dropped per primary topic.
+    pub drops: DropCounts,
+    /// CPU time used by the writer thread, ns (0 if unavailable).
+    pub writer_cpu_ns: u64,
+}
+
+/// Cheap, cloneable producer side of a [`Recorder`]. Every method returns at once; a message that
+/// cannot be queued is dropped and counted.
+#[derive(Debug, Clone)]
+pub struct RecorderHandle {
+    tx: Sender<Msg>,
+    /// Capacity-1 wake-up for the writer when a depth frame is queued (never uses `tx` room).
+    wake: Sender<()>,
+    shared: Arc<Shared>,
+}
+
+impl RecorderHandle {
+    fn push(&self, kind: Kind, msg: Msg) {
+        self.shared.counters.offer(kind);
+        match self.tx.try_send(msg) {
+            Ok(()) => {}
+            Err(TrySendError::Full(m) | TrySendError::Disconnected(m)) => {
+                self.shared.counters.drop_one(kind);
+                self.recycle(m);
+            }
+        }
+    }
+
+    fn recycle(&self, m: Msg) {
+        match m {
+            Msg::Map(b) => self.shared.map_pool.give(b),
+            Msg::Decision(b) => self.shared.decision_pool.give(b),
+            _ => {}
+        }
+    }
+
+    /// Record a depth frame (`/camera/depth`). Copies the used pixels into a preallocated buffer;
+    /// if all are queued, the oldest queued frame is dropped (and counted) to make room.
+    pub fn record_depth(&self, frame: &DepthFrame) {
+        let s = &*self.shared;
+        s.counters.offer(Kind::Depth);
+        let mut buf = match s.depth_pool.take().or_else(|| {
+            let old = s.depth_ready.pop();
+            if old.is_some() {
+                s.counters.drop_one(Kind::Depth);
+            }
+            old
+        }) {
+            Some(b) => b,
+            None => {
+                // Every buffer is in the writer's or another producer's hands.
+                s.counters.drop_one(Kind::Depth);
+                return;
+            }
+        };
+        convert::copy_depth(frame, &mut buf);
+        if let Some(old) = s.depth_ready.force_push(buf) {
+            s.counters.drop_one(Kind::Depth);
+            s.depth_pool.give(old);
+        }
+        // Wake the writer; a pending wake-up already does.
+        let _ = self.wake.try_send(());
+    }
+
+    /// Record the estimated robot state (`/tf`, `/trajectory`).
+    pub fn record_state(&self, state: &RobotState) {
+        self.push(Kind::State, Msg::State(*state));
+    }
+
+    /// Record the true robot state (`/truth/tf`, `/truth/trajectory`); simulation only.
+    pub fn record_true_state(&self, state: &RobotState) {
+        self.push(Kind::TrueState, Msg::TrueState(*state));
+    }
+
+    /// Record an object map (`/map/objects`), copied into a pooled buffer.
+    pub fn record_map(&self, map: &ObjectMap) {
+        match self.shared.map_pool.take() {
+            Some(mut b) => {
+                convert::copy_map(map, &mut b);
+                self.push(Kind::Map, Msg::Map(b));
+            }
+            None => {
+                self.shared.counters.offer(Kind::Map);
+                self.shared.counters.drop_one(Kind::Map);
+            }
+        }
+    }
+
+    /// Record a planner decision (`/planner/decisions` and `/planner/gbv` or `/planner/lbv`),
+    /// copied into a pooled buffer.
+    pub fn record_decision(&self, d: &PlannerDecision) {
+        match self.shared.decision_pool.take() {
+            Some(mut b) => {
+                convert::copy_decision(d, &mut b);
+                self.push(Kind::Decision, Msg::Decision(b));
+            }
+            None => {
+                self.shared.counters.offer(Kind::Decision);
+                self.shared.counters.drop_one(Kind::Decision);
+            }
+        }
+    }
+
+    /// Record a navigation goal (`/planner/nav_goal`).
+    pub fn record_nav_goal(&self, g: &NavGoal) {
+        self.push(Kind::NavGoal, Msg::NavGoal(*g));
+    }
+
+    /// Record a neck goal (`/planner/neck_goal`).
+    pub fn record_neck_goal(&self, g: &NeckGoal) {
+        self.push(Kind::NeckGoal, Msg::NeckGoal(*g));
+    }
+
+    /// Record a deadline-monitor event (`/runtime/deadline`).
+    pub fn record_deadline(&self, e: &DeadlineEvent) {
+        self.push(Kind::Deadline, Msg::Deadline(*e));
+    }
+
+    /// Record a latency summary (`/runtime/latency`), about once a second.
+    pub fn record_latency(&self, s: LatencySummary) {
+        self.push(Kind::Latency, Msg::Latency(s));
+    }
+
+    /// Record a log line (`/log`) at time `time_ns` from `name` (node or thread).
+    pub fn log(&self, time_ns: u64, level: LogLevel, name: &str, text: &str) {
+        self.push(
+            Kind::Log,
+            Msg::Log {
+                time_ns,
+                level,
+                name: name.to_string(),
+                text: text.to_string(),
+            },
+        );
+    }
+
+    /// Record the final metrics (`/metrics`): the `metrics.json` object.
+    pub fn record_metrics(&self, time_ns: u64, value: serde_json::Value) {
+        self.push(Kind::Metrics, Msg::Metrics { time_ns, value });
+    }
+
+    /// Offered and dropped counts so far, per primary topic.
+    pub fn drops(&self) -> DropCounts {
+        self.shared.drop_counts()
+    }
+
+    /// Drops so far of one kind.
+    pub fn dropped(&self, kind: Kind) -> u64 {
+        self.shared.counters.dropped[kind as usize].load(Ordering::Relaxed)
+    }
+}
+
+/// A recording in progress: the writer thread and a handle. Finishes the file on drop.
+#[derive(Debug)]
+pub struct Recorder {
+    handle: RecorderHandle,
+    thread: Option<JoinHandle<Result<RecorderSummary, RecorderError>>>,
+    path: PathBuf,
+}
+
+impl Recorder {
+    /// Create `path` (truncating it), write the header, schemas, channels and the static
+    /// `setup`, and start the writer thread.
+    pub fn create(
+        path: &Path,
+        cfg: &RecorderConfig,
+        setup: RecorderSetup,
+    ) -> Result<Recorder, RecorderError> {
+        let (tx, rx): (Sender<Msg>, Receiver<Msg>) = crossbeam::channel::bounded(cfg.queue_len);
+        let (wake, wake_rx) = crossbeam::channel::bounded(1);
+        let shared = Arc::new(Shared {
+            counters: Counters::default(),
+            depth_ready: ArrayQueue::new(cfg.depth_queue_len),
+            depth_pool: Pool::new(cfg.depth_queue_len + 1),
+            map_pool: Pool::new(cfg.pool_len),
+            decision_pool: Pool::new(cfg.pool_len),
+        });
+        let w = writer::WriterState::open(path, cfg, &setup)?;
+        let sh = Arc::clone(&shared);
+        let thread = std::thread::Builder::new()
+            .name("recorder".into())
+            .spawn(move || w.run(rx, wake_rx, sh))
+            .map_err(RecorderError::Spawn)?;
+        Ok(Recorder {
+            handle: RecorderHandle { tx, wake, shared },
+            thread: Some(thread),
+            path: path.to_path_buf(),
+        })
+    }
+
+    /// A producer handle (clone it freely).
+    pub fn handle(&self) -> RecorderHandle {
+        self.handle.clone()
+    }
+
+    /// The file being written.
+    pub fn path(&self) -> &Path {
+        &self.path
+    }
+
+    /// Write everything queued, the final stats and the summary, and close the file. Messages
+    /// recorded through handles afterwards are counted as dropped.
+    pub fn finish(mut self) -> Result<RecorderSummary, RecorderError> {
+        self.finish_inner()
+    }
+
+    fn finish_inner(&mut self) -> Result<RecorderSummary, RecorderError> {
+        let Some(thread) = self.thread.take() else {
+            return Ok(RecorderSummary::default());
+        };
+        // Blocking send: waits for room, fails only if the thread already ended (I/O error).
+        let _ = self.handle.tx.send(Msg::Finish);
+        match thread.join() {
+            Ok(r) => r,
+            Err(_) => Err(RecorderError::Panicked {
+                path: self.path.clone(),
+            }),
+        }
+    }
+}
+
+impl Drop for Recorder {
+    fn drop(&mut self) {
+        if let Err(e) = self.finish_inner() {
+            eprintln!("recorder: {e}");
+        }
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::config::parse_toml;
+
+    #[derive(Debug, Deserialize)]
+    struct Root {
+        recorder: RecorderConfig,
+    }
+
+    #[test]
+    fn shipped_section_equals_defaults_and_validates() {
+        let text = include_str!("../../../config/default.toml");
+        let root: Root = parse_toml(Path::new("config/default.toml"), text).unwrap();
+        assert_eq!(root.recorder, RecorderConfig::default());
+        root.recorder
+            .validate(&Checker::new("config/default.toml"))
+            .unwrap();
+    }
+
+    #[test]
+    fn bad_values_are_named() {
+        let f = Path::new("bad.toml");
+        let c = Checker::new("bad.toml");
+        let r: Root = parse_toml(f, "[recorder]\ndepth_decimation = 0\n").unwrap();
+        let e = r.recorder.validate(&c).unwrap_err();
+        assert_eq!(
+            e.to_string(),
+            "bad.toml: recorder.depth_decimation = 0: must be in [1, 16]"
+        );
+        let r: Root = parse_toml(f, "[recorder]\nflush_interval_s = 0.0\n").unwrap();
+        assert_eq!(
+            r.recorder.validate(&c).unwrap_err().key(),
+            "recorder.flush_interval_s"
+        );
+        let e = parse_toml::<Root>(f, "[recorder]\ncompression = \"gzip\"\n").unwrap_err();
+        assert_eq!(e.key(), "recorder.compression", "{e}");
+        let e = parse_toml::<Root>(f, "[recorder]\nqueue = 3\n").unwrap_err();
+        assert!(e.to_string().contains("unknown field `queue`"), "{e}");
+    }
+
+    #[test]
+    fn depth_ring_keeps_the_newest_frames_and_counts_the_replaced_ones() {
+        // No writer thread: the handle alone, so the ring's behaviour is exact.
+        let (tx, _rx) = crossbeam::channel::bounded(4);
+        let (wake, _wake_rx) = crossbeam::channel::bounded(1);
+        let shared = Arc::new(Shared {
+            counters: Counters::default(),
+            depth_ready: ArrayQueue::new(2),
+            depth_pool: Pool::new(3),
+            map_pool: Pool::new(1),
+            decision_pool: Pool::new(1),
+        });
+        let h = RecorderHandle {
+            tx,
+            wake,
+            shared: Arc::clone(&shared),
+        };
+        let mut f = boxed_zeroed::<DepthFrame>();
+        f.width = 2;
+        f.height = 2;
+        for seq in 1..=6 {
+            f.header.seq = seq;
+            h.record_depth(&f);
+        }
+        let kept: Vec<u64> = std::iter::from_fn(|| shared.depth_ready.pop())
+            .map(|b| b.header.seq)
+            .collect();
+        assert_eq!(kept, [5, 6]);
+        assert_eq!(h.dropped(Kind::Depth), 4);
+        assert_eq!(h.drops().offered[schemas::topic::DEPTH], 6);
+        // Pooled kinds: one box in the pool; the second map finds none and is dropped, counted.
+        let m = boxed_zeroed::<ObjectMap>();
+        h.record_map(&m);
+        h.record_map(&m);
+        assert_eq!(h.dropped(Kind::Map), 1);
+        assert_eq!(h.drops().offered[schemas::topic::MAP], 2);
+    }
+}

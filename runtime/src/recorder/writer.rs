@@ -1,0 +1,494 @@
+//! The writer thread: owns the `mcap::Writer`, converts messages, bounds chunk age, writes stats.
+
+use super::convert;
+use super::schemas::{self, SESSION_METADATA, STATS_METADATA, topic};
+use super::{
+    Compression, DropCounts, MountGeometry, Msg, RecorderConfig, RecorderError, RecorderSetup,
+    RecorderSummary, Shared,
+};
+use crossbeam::channel::{Receiver, TryRecvError};
+use mcap::records::{MessageHeader, Metadata};
+use serde::Serialize;
+use shm_types::{DepthFrame, RobotState, decision_kind};
+use std::collections::{BTreeMap, HashMap};
+use std::fs::File;
+use std::io::{BufWriter, Write};
+use std::path::{Path, PathBuf};
+use std::sync::Arc;
+use std::time::{Duration, Instant};
+
+/// One channel of the file.
+#[derive(Debug)]
+struct Chan {
+    topic: &'static str,
+    id: u16,
+    seq: u32,
+    written: u64,
+}
+
+/// A base trajectory being accumulated.
+#[derive(Debug, Default)]
+struct Trajectory {
+    poses: Vec<[f32; 3]>,
+    last_sent_ns: Option<u64>,
+}
+
+impl Trajectory {
+    /// Add a pose; returns true when a message is due.
+    fn add(&mut self, s: &RobotState, period_ns: u64, max: usize) -> bool {
+        let p = s.base_pose;
+        let moved = self
+            .poses
+            .last()
+            .is_none_or(|q| (q[0] - p[0]).hypot(q[1] - p[1]) > 0.01 || (q[2] - p[2]).abs() > 0.02);
+        if moved {
+            if self.poses.len() >= max {
+                // Thin the older half by 2 so memory and message size stay bounded.
+                let mut k = 0;
+                self.poses.retain(|_| {
+                    k += 1;
+                    k % 2 == 1
+                });
+            }
+            self.poses.push(p);
+        }
+        let t = s.header.sim_time_ns;
+        let due = self
+            .last_sent_ns
+            .is_none_or(|l| t >= l.saturating_add(period_ns) || t < l);
+        if due {
+            self.last_sent_ns = Some(t);
+        }
+        due
+    }
+}
+
+/// The writer thread's state.
+pub(super) struct WriterState {
+    path: PathBuf,
+    mcap: mcap::Writer<BufWriter<File>>,
+    chans: Vec<Chan>,
+    index: HashMap<&'static str, usize>,
+    mount: MountGeometry,
+    cfg: RecorderConfig,
+    out: Vec<u8>,
+    scratch: Vec<u8>,
+    chunk_open_since: Option<Instant>,
+    last_stats: Instant,
+    last_log_ns: u64,
+    traj: Trajectory,
+    truth_traj: Trajectory,
+}
+
+impl std::fmt::Debug for WriterState {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        f.debug_struct("WriterState")
+            .field("path", &self.path)
+            .finish_non_exhaustive()
+    }
+}
+
+#[derive(Debug, Serialize)]
+struct StatsJson<'a> {
+    offered: &'a BTreeMap<String, u64>,
+    dropped: &'a BTreeMap<String, u64>,
+    written: BTreeMap<&'static str, u64>,
+    dropped_total: u64,
+    #[serde(rename = "final")]
+    last: bool,
+}
+
+/// CPU time of the calling thread, ns, from `/proc/thread-self/schedstat` (0 if unavailable).
+pub(crate) fn thread_cpu_ns() -> u64 {
+    std::fs::read_to_string("/proc/thread-self/schedstat")
+        .ok()
+        .and_then(|s| s.split_whitespace().next()?.parse().ok())
+        .unwrap_or(0)
+}
+
+impl WriterState {
+    pub(super) fn open(
+        path: &Path,
+        cfg: &RecorderConfig,
+        setup: &RecorderSetup,
+    ) -> Result<Self, RecorderError> {
+        let file = File::create(path).map_err(|source| RecorderError::Create {
+            path: path.to_path_buf(),
+            source,
+        })?;
+        let mcap_err = |source| RecorderError::Mcap {
+            path: path.to_path_buf(),
+            source,
+        };
+        let mut opts = mcap::WriteOptions::new()
+            .profile("")
+            .library(format!("vpsom-rt {}", env!("CARGO_PKG_VERSION")))
+            .chunk_size(Some(cfg.chunk_size_kb * 1024))
+            .compression(match cfg.compression {
+                Compression::Zstd => Some(mcap::Compression::Zstd),
+                Compression::Lz4 => Some(mcap::Compression::Lz4),
+                Compression::None => None,
+            })
+            .compression_level(cfg.compression_level)
+            // The writer thread compresses alone: no zstd worker threads competing with nodes.
+            .compression_threads(0);
+        if cfg.compression == Compression::None {
+            opts = opts.compression_level(0);
+        }
+        let mut mcap = opts
+            .create(BufWriter::with_capacity(1 << 20, file))
+            .map_err(mcap_err)?;
+        let mut chans = Vec::new();
+        let mut index = HashMap::new();
+        for (t, name, schema) in schemas::channels() {
+            let data = serde_json::to_vec(&schema).unwrap_or_default();
+            let sid = mcap
+                .add_schema(name, "jsonschema", &data)
+                .map_err(mcap_err)?;
+            let id = mcap
+                .add_channel(sid, t, "json", &BTreeMap::new())
+                .map_err(mcap_err)?;
+            index.insert(t, chans.len());
+            chans.push(Chan {
+                topic: t,
+                id,
+                seq: 0,
+                written: 0,
+            });
+        }
+        let m = setup.mount;
+        let session = Metadata {
+            name: SESSION_METADATA.into(),
+            metadata: BTreeMap::from([
+                ("scene".to_string(), setup.scene.clone()),
+                ("mount_height_m".to_string(), m.height.to_string()),
+                (
+                    "mount_forward_offset_m".to_string(),
+                    m.forward_offset.to_string(),
+                ),
+                ("hfov_deg".to_string(), m.hfov_deg.to_string()),
+                ("vfov_deg".to_string(), m.vfov_deg.to_string()),
+                (
+                    "depth_decimation".to_string(),
+                    cfg.depth_decimation.to_string(),
+                ),
+                ("truth_objects".to_string(), setup.truth.len().to_string()),
+            ]),
+        };
+        mcap.write_metadata(&session).map_err(mcap_err)?;
+        let mut w = WriterState {
+            path: path.to_path_buf(),
+            mcap,
+            chans,
+            index,
+            mount: setup.mount,
+            cfg: cfg.clone(),
+            out: Vec::with_capacity(1 << 16),
+            scratch: Vec::new(),
+            chunk_open_since: None,
+            last_stats: Instant::now(),
+            last_log_ns: 0,
+            traj: Trajectory::default(),
+            truth_traj: Trajectory::default(),
+        };
+        if !setup.truth.is_empty() {
+            let mut out = std::mem::take(&mut w.out);
+            convert::truth_objects(&setup.truth, &mut out);
+            w.write(topic::TRUTH_OBJECTS, 0, 0, &out)?;
+            w.out = out;
+        }
+        Ok(w)
+    }
+
+    fn err(&self, source: mcap::McapError) -> RecorderError {
+        RecorderError::Mcap {
+            path: self.path.clone(),
+            source,
+        }
+    }
+
+    fn write(
+        &mut self,
+        topic: &'static str,
+        log_ns: u64,
+        publish_ns: u64,
+        data: &[u8],
+    ) -> Result<(), RecorderError> {
+        let Some(&i) = self.index.get(topic) else {
+            return Ok(());
+        };
+        let c = &mut self.chans[i];
+        c.seq = c.seq.wrapping_add(1);
+        c.written += 1;
+        let header = MessageHeader {
+            channel_id: c.id,
+            sequence: c.seq,
+            log_time: log_ns,
+            publish_time: publish_ns,
+        };
+        self.last_log_ns = self.last_log_ns.max(log_ns);
+        if let Err(e) = self.mcap.write_to_known_channel(&header, data) {
+            return Err(self.err(e));
+        }
+        self.chunk_open_since.get_or_insert_with(Instant::now);
+        Ok(())
+    }
+
+    /// Convert `msg` with `f` into the reusable buffer and write it.
+    fn emit(
+        &mut self,
+        topic: &'static str,
+        log_ns: u64,
+        publish_ns: u64,
+        f: impl FnOnce(&mut Vec<u8>),
+    ) -> Result<(), RecorderError> {
+        let mut out = std::mem::take(&mut self.out);
+        f(&mut out);
+        let r = self.write(topic, log_ns, publish_ns, &out);
+        self.out = out;
+        r
+    }
+
+    fn handle(&mut self, m: Msg, shared: &Shared) -> Result<(), RecorderError> {
+        let mount = self.mount;
+        match m {
+            Msg::Finish => {}
+            Msg::State(s) | Msg::TrueState(s) => {
+                let truth = matches!(m, Msg::TrueState(_));
+                let (t, p) = (s.header.sim_time_ns, s.header.stamp_ns);
+                let tf_topic = if truth { topic::TRUTH_TF } else { topic::TF };
+                self.emit(tf_topic, t, p, |o| {
+                    convert::transforms(&s, &mount, truth, o)
+                })?;
+                let period = (1e9 / self.cfg.trajectory_hz) as u64;
+                let max = self.cfg.trajectory_max_poses;
+                let tr = if truth {
+                    &mut self.truth_traj
+                } else {
+                    &mut self.traj
+                };
+                if tr.add(&s, period, max) {
+                    let poses = std::mem::take(&mut tr.poses);
+                    let traj_topic = if truth {
+                        topic::TRUTH_TRAJECTORY
+                    } else {
+                        topic::TRAJECTORY
+                    };
+                    let r = self.emit(traj_topic, t, p, |o| convert::trajectory(t, &poses, o));
+                    if truth {
+                        self.truth_traj.poses = poses;
+                    } else {
+                        self.traj.poses = poses;
+                    }
+                    r?;
+                }
+            }
+            Msg::Map(b) => {
+                let r = self.emit(topic::MAP, b.header.sim_time_ns, b.header.stamp_ns, |o| {
+                    convert::map_objects(&b, o)
+                });
+                shared.map_pool.give(b);
+                r?;
+            }
+            Msg::Decision(b) => {
+                let (t, p) = (b.header.sim_time_ns, b.header.stamp_ns);
+                let len = self.cfg.frustum_length_m;
+                let scene = if b.kind == decision_kind::GBV {
+                    topic::GBV
+                } else {
+                    topic::LBV
+                };
+                let r = self
+                    .emit(topic::DECISIONS, t, p, |o| convert::decision(&b, o))
+                    .and_then(|()| self.emit(scene, t, p, |o| convert::frusta(&b, &mount, len, o)));
+                shared.decision_pool.give(b);
+                r?;
+            }
+            Msg::NavGoal(g) => {
+                let (t, p) = (g.header.sim_time_ns, g.header.stamp_ns);
+                self.emit(topic::NAV_GOAL, t, p, |o| convert::nav_goal(&g, o))?;
+            }
+            Msg::NeckGoal(g) => {
+                let (t, p) = (g.header.sim_time_ns, g.header.stamp_ns);
+                self.emit(topic::NECK_GOAL, t, p, |o| convert::neck_goal(&g, o))?;
+            }
+            Msg::Deadline(e) => {
+                let (t, p) = (e.header.sim_time_ns, e.header.stamp_ns);
+                self.emit(topic::DEADLINE, t, p, |o| convert::deadline(&e, o))?;
+            }
+            Msg::Latency(s) => {
+                self.emit(topic::LATENCY, s.time_ns, s.time_ns, |o| {
+                    convert::latency(&s, o)
+                })?;
+            }
+            Msg::Log {
+                time_ns,
+                level,
+                name,
+                text,
+            } => {
+                self.emit(topic::LOG, time_ns, time_ns, |o| {
+                    convert::log(time_ns, level, &name, &text, o)
+                })?;
+            }
+            Msg::Metrics { time_ns, value } => {
+                self.emit(topic::METRICS, time_ns, time_ns, |o| {
+                    convert::value(&value, o)
+                })?;
+            }
+        }
+        Ok(())
+    }
+
+    fn depth(&mut self, f: &DepthFrame) -> Result<(), RecorderError> {
+        let mut scratch = std::mem::take(&mut self.scratch);
+        let k = self.cfg.depth_decimation;
+        let r = self.emit(topic::DEPTH, f.header.sim_time_ns, f.header.stamp_ns, |o| {
+            convert::depth_image(f, k, &mut scratch, o)
+        });
+        self.scratch = scratch;
+        r
+    }
+
+    fn written(&self) -> BTreeMap<&'static str, u64> {
+        self.chans.iter().map(|c| (c.topic, c.written)).collect()
+    }
+
+    fn stats(&mut self, drops: &DropCounts, last: bool) -> Result<(), RecorderError> {
+        let msg = StatsJson {
+            offered: &drops.offered,
+            dropped: &drops.dropped,
+            written: self.written(),
+            dropped_total: drops.total_dropped(),
+            last,
+        };
+        let t = self.last_log_ns;
+        self.emit(topic::STATS, t, t, |o| {
+            o.clear();
+            let _ = serde_json::to_writer(o, &msg);
+        })
+    }
+
+    /// Flush a chunk that is older than the interval; write stats when due.
+    fn tick(&mut self, shared: &Shared) -> Result<(), RecorderError> {
+        let now = Instant::now();
+        if self.last_stats.elapsed().as_secs_f64() >= self.cfg.stats_interval_s {
+            self.last_stats = now;
+            self.stats(&shared.drop_counts(), false)?;
+        }
+        if let Some(since) = self.chunk_open_since
+            && now.duration_since(since).as_secs_f64() >= self.cfg.flush_interval_s
+        {
+            if let Err(e) = self.mcap.flush() {
+                return Err(self.err(e));
+            }
+            self.chunk_open_since = None;
+        }
+        Ok(())
+    }
+
+    /// Time until the next tick is due.
+    fn next_tick(&self) -> Duration {
+        let stats = self.cfg.stats_interval_s - self.last_stats.elapsed().as_secs_f64();
+        let flush = self.chunk_open_since.map_or(f64::INFINITY, |s| {
+            self.cfg.flush_interval_s - s.elapsed().as_secs_f64()
+        });
+        Duration::from_secs_f64(stats.min(flush).clamp(0.001, 1.0))
+    }
+
+    /// The thread body: serve the channel (all of it before each depth frame), tick, finish.
+    pub(super) fn run(
+        mut self,
+        rx: Receiver<Msg>,
+        wake: Receiver<()>,
+        shared: Arc<Shared>,
+    ) -> Result<RecorderSummary, RecorderError> {
+        let drain_max = self.cfg.queue_len;
+        'outer: loop {
+            let first = if shared.depth_ready.is_empty() {
+                crossbeam::channel::select! {
+                    recv(rx) -> m => match m {
+                        Ok(m) => Some(m),
+                        Err(_) => break,
+                    },
+                    recv(wake) -> _ => None,
+                    default(self.next_tick()) => None,
+                }
+            } else {
+                let _ = wake.try_recv();
+                None
+            };
+            if let Some(m) = first {
+                if matches!(m, Msg::Finish) {
+                    break;
+                }
+                self.handle(m, &shared)?;
+            }
+            for _ in 0..drain_max {
+                match rx.try_recv() {
+                    Ok(Msg::Finish) => break 'outer,
+                    Ok(m) => self.handle(m, &shared)?,
+                    Err(TryRecvError::Empty) => break,
+                    Err(TryRecvError::Disconnected) => break 'outer,
+                }
+            }
+            if let Some(f) = shared.depth_ready.pop() {
+                let r = self.depth(&f);
+                shared.depth_pool.give(f);
+                r?;
+            }
+            self.tick(&shared)?;
+        }
+        // Finish: whatever is queued, then final stats, the metadata record and the summary.
+        while let Ok(m) = rx.try_recv() {
+            self.handle(m, &shared)?;
+        }
+        while let Some(f) = shared.depth_ready.pop() {
+            let r = self.depth(&f);
+            shared.depth_pool.give(f);
+            r?;
+        }
+        let drops = shared.drop_counts();
+        self.stats(&drops, true)?;
+        let mut meta = BTreeMap::new();
+        for (t, n) in &drops.offered {
+            meta.insert(format!("offered:{t}"), n.to_string());
+        }
+        for (t, n) in &drops.dropped {
+            meta.insert(format!("dropped:{t}"), n.to_string());
+        }
+        for (t, n) in self.written() {
+            meta.insert(format!("written:{t}"), n.to_string());
+        }
+        meta.insert("dropped_total".into(), drops.total_dropped().to_string());
+        let md = Metadata {
+            name: STATS_METADATA.into(),
+            metadata: meta,
+        };
+        if let Err(e) = self.mcap.write_metadata(&md) {
+            return Err(self.err(e));
+        }
+        if let Err(e) = self.mcap.finish() {
+            return Err(self.err(e));
+        }
+        let written = self
+            .written()
+            .into_iter()
+            .map(|(t, n)| (t.to_string(), n))
+            .collect();
+        let cpu = thread_cpu_ns();
+        let path = self.path.clone();
+        let mut file = self.mcap.into_inner();
+        file.flush()
+            .and_then(|()| file.get_ref().sync_all())
+            .map_err(|source| RecorderError::Mcap {
+                path,
+                source: source.into(),
+            })?;
+        Ok(RecorderSummary {
+            written,
+            drops,
+            writer_cpu_ns: cpu,
+        })
+    }
+}
