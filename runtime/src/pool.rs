@@ -312,7 +312,7 @@ mod tests {
         let a = pool.try_submit(|| panic!("boom")).unwrap();
         let b = pool.try_submit(|| 7).unwrap();
         assert!(b > a);
-        let mut got = vec![
+        let mut got = [
             pool.recv_timeout(Duration::from_secs(10)).unwrap(),
             pool.recv_timeout(Duration::from_secs(10)).unwrap(),
         ];

@@ -260,7 +260,7 @@ pub enum PortError {
     Service {
         /// Full service name.
         service: String,
-        /// `"publish-subscribe"` or `"event"`.
+        /// `"publish-subscribe"`, `"event"` or `"any"` (listing).
         pattern: &'static str,
         /// iceoryx2's reason.
         reason: String,
@@ -347,6 +347,28 @@ impl fmt::Debug for PortContext {
 /// a file (see the module docs).
 pub fn iceoryx2_config() -> iceoryx2::config::Config {
     iceoryx2::config::Config::default()
+}
+
+/// Names of the existing services (any process) under `vpsom/<namespace>/`, sorted; each topic
+/// appears twice (publish-subscribe and event). Used to check that a run cleaned up.
+pub fn list_services(namespace: &str) -> Result<Vec<String>, PortError> {
+    use iceoryx2::prelude::{CallbackProgression, Service as _};
+    let prefix = format!("{SERVICE_ROOT}/{namespace}/");
+    let mut names = Vec::new();
+    ipc::Service::list(&iceoryx2_config(), |svc| {
+        let name = svc.static_details.name().as_str();
+        if name.starts_with(&prefix) {
+            names.push(name.to_string());
+        }
+        CallbackProgression::Continue
+    })
+    .map_err(|e| PortError::Service {
+        service: prefix.clone(),
+        pattern: "any",
+        reason: format!("cannot list services: {e:?}"),
+    })?;
+    names.sort();
+    Ok(names)
 }
 
 impl PortContext {
