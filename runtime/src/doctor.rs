@@ -48,6 +48,9 @@ pub struct Report {
     pub iceoryx2_root: String,
     /// Prefix of every iceoryx2 file.
     pub iceoryx2_prefix: String,
+    /// This user may create iceoryx2's bookkeeping files (the root path, or `/tmp` if the root
+    /// does not exist yet) and its shared memory in `shm_dir`.
+    pub iceoryx2_access: Probe,
     /// `SCHED_FIFO` (priority 1) on a scratch thread.
     pub fifo: Probe,
     /// Highest FIFO priority the kernel allows.
@@ -137,7 +140,23 @@ impl Report {
             .find(|l| l.starts_with("Uid:"))
             .and_then(|l| l.split_whitespace().nth(2))
             .and_then(|v| v.parse().ok());
+        let root = std::path::PathBuf::from(ice.global.root_path().to_string());
+        let iceoryx2_access = Probe::from(
+            [root.join("nodes"), root.join("services")]
+                .iter()
+                .filter(|d| d.exists())
+                .map(|d| crate::os::dir_writable(d))
+                .chain(std::iter::once(if root.exists() {
+                    crate::os::dir_writable(&root)
+                } else {
+                    crate::os::dir_writable(root.parent().unwrap_or(&root))
+                }))
+                .chain(std::iter::once(crate::os::dir_writable(&shm_dir)))
+                .collect::<std::io::Result<Vec<()>>>()
+                .map(|_| ()),
+        );
         Self {
+            iceoryx2_access,
             shm_dir,
             shm_space,
             iceoryx2_root: ice.global.root_path().to_string(),
@@ -192,6 +211,7 @@ impl fmt::Display for Report {
             "iceoryx2:           root {} prefix {} (config built in code, no iceoryx2.toml read)",
             self.iceoryx2_root, self.iceoryx2_prefix
         )?;
+        writeln!(f, "iceoryx2 access:    {}", self.iceoryx2_access)?;
         writeln!(
             f,
             "SCHED_FIFO:         {} (max priority {})",

@@ -182,6 +182,15 @@ pub fn monotonic_resolution_ns() -> io::Result<u64> {
     Ok(ts.tv_sec as u64 * 1_000_000_000 + ts.tv_nsec as u64)
 }
 
+/// `access(path, R_OK | W_OK | X_OK)`: the calling user may create files in directory `path`.
+pub fn dir_writable(path: &std::path::Path) -> io::Result<()> {
+    use std::os::unix::ffi::OsStrExt;
+    let c = std::ffi::CString::new(path.as_os_str().as_bytes())
+        .map_err(|_| io::Error::from_raw_os_error(libc::EINVAL))?;
+    // SAFETY: `c` is a NUL-terminated path that outlives the call; access only reads it.
+    check(unsafe { libc::access(c.as_ptr(), libc::R_OK | libc::W_OK | libc::X_OK) })
+}
+
 /// Size and free space (bytes available to this user) of the filesystem holding `path`.
 pub fn fs_space(path: &std::path::Path) -> io::Result<(u64, u64)> {
     use std::os::unix::ffi::OsStrExt;
