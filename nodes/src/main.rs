@@ -38,5 +38,7 @@ fn main() -> ExitCode {
 fn doctor(config: Option<PathBuf>) -> anyhow::Result<()> {
     let (_cfg, from) = nodes::config::Config::load_or_default(config.as_deref())?;
     println!("config: {}", from.display());
+    print!("{}", runtime::doctor::Report::gather());
+    println!();
     Ok(())
 }

@@ -1,17 +1,255 @@
 //! The narrow module where runtime makes OS calls (scheduling, memory locking, affinity, clocks).
+//! It is the only place in `runtime` with `unsafe`; every call returns `io::Result` and touches
+//! only the calling thread unless documented otherwise (Linux applies scheduling attributes given
+//! pid/tid 0 or a tid to that one thread).
 #![allow(unsafe_code)]
 
 use std::io;
+
+/// `Ok(())` if a libc call returned 0, else the thread's `errno`.
+fn check(ret: libc::c_int) -> io::Result<()> {
+    if ret == 0 {
+        Ok(())
+    } else {
+        Err(io::Error::last_os_error())
+    }
+}
+
+/// The kernel thread id of the calling thread.
+pub fn gettid() -> libc::pid_t {
+    // SAFETY: `gettid` takes no arguments, cannot fail and has no memory effects.
+    unsafe { libc::gettid() }
+}
+
+/// Set the calling thread to `SCHED_FIFO` at `priority` (1..=99). EPERM without CAP_SYS_NICE or
+/// an RLIMIT_RTPRIO allowance.
+pub fn set_fifo(priority: i32) -> io::Result<()> {
+    set_policy(libc::SCHED_FIFO, priority)
+}
+
+/// Set the calling thread back to `SCHED_OTHER` (priority 0).
+pub fn set_other() -> io::Result<()> {
+    set_policy(libc::SCHED_OTHER, 0)
+}
+
+/// Set the calling thread to `SCHED_IDLE` (runs only when nothing else wants the CPU).
+pub fn set_idle() -> io::Result<()> {
+    set_policy(libc::SCHED_IDLE, 0)
+}
+
+fn set_policy(policy: libc::c_int, priority: i32) -> io::Result<()> {
+    let param = libc::sched_param {
+        sched_priority: priority,
+    };
+    // SAFETY: `param` is a valid, initialised `sched_param` that outlives the call; pid 0 means
+    // the calling thread; the kernel only reads the struct.
+    check(unsafe { libc::sched_setscheduler(0, policy, &param) })
+}
+
+/// Highest `SCHED_FIFO` priority (99 on Linux).
+pub fn fifo_max_priority() -> i32 {
+    // SAFETY: no pointers, no side effects.
+    unsafe { libc::sched_get_priority_max(libc::SCHED_FIFO) }
+}
+
+/// Scheduling policy of the calling thread (`libc::SCHED_*`).
+#[cfg(test)]
+pub fn current_policy() -> io::Result<libc::c_int> {
+    // SAFETY: no pointers; pid 0 means the calling thread.
+    let p = unsafe { libc::sched_getscheduler(0) };
+    if p < 0 {
+        Err(io::Error::last_os_error())
+    } else {
+        Ok(p)
+    }
+}
+
+/// Set the nice value (-20..=19) of the calling thread only.
+pub fn set_nice(nice: i32) -> io::Result<()> {
+    // SAFETY: no pointers; on Linux `PRIO_PROCESS` with a thread id changes that one thread.
+    check(unsafe { libc::setpriority(libc::PRIO_PROCESS, gettid() as libc::id_t, nice) })
+}
+
+/// Nice value of the calling thread.
+pub fn nice() -> io::Result<i32> {
+    // `getpriority` may legitimately return -1, so errno must be cleared and checked.
+    // SAFETY: `__errno_location` returns the calling thread's errno slot, valid for writes.
+    unsafe { *libc::__errno_location() = 0 };
+    // SAFETY: no pointers; a thread id with PRIO_PROCESS reads that thread's nice value.
+    let n = unsafe { libc::getpriority(libc::PRIO_PROCESS, gettid() as libc::id_t) };
+    let err = io::Error::last_os_error();
+    if n == -1 && err.raw_os_error().unwrap_or(0) != 0 {
+        Err(err)
+    } else {
+        Ok(n)
+    }
+}
+
+/// Lock all current and future pages of the **process** in RAM (`MCL_CURRENT | MCL_FUTURE`).
+pub fn mlockall() -> io::Result<()> {
+    // SAFETY: no pointers; only changes the paging of this process.
+    check(unsafe { libc::mlockall(libc::MCL_CURRENT | libc::MCL_FUTURE) })
+}
+
+/// Lock only the current pages of the process (used by `doctor` as a probe).
+pub fn mlockall_current() -> io::Result<()> {
+    // SAFETY: no pointers; only changes the paging of this process.
+    check(unsafe { libc::mlockall(libc::MCL_CURRENT) })
+}
+
+/// Undo [`mlockall`] for the whole process.
+pub fn munlockall() -> io::Result<()> {
+    // SAFETY: no pointers; only changes the paging of this process.
+    check(unsafe { libc::munlockall() })
+}
+
+/// Pin the calling thread to `cpus` (indices). EINVAL if none of them exists.
+pub fn set_affinity(cpus: &[usize]) -> io::Result<()> {
+    // SAFETY: an all-zero `cpu_set_t` is the empty set (it is a plain bit array).
+    let mut set: libc::cpu_set_t = unsafe { std::mem::zeroed() };
+    let max = 8 * std::mem::size_of::<libc::cpu_set_t>();
+    for &c in cpus {
+        if c >= max {
+            return Err(io::Error::from_raw_os_error(libc::EINVAL));
+        }
+        // SAFETY: `c` is below the set's capacity (checked above); `set` is a valid cpu_set_t.
+        unsafe { libc::CPU_SET(c, &mut set) };
+    }
+    // SAFETY: `set` is a valid cpu_set_t of the size passed; pid 0 is the calling thread; the
+    // kernel only reads it.
+    check(unsafe { libc::sched_setaffinity(0, std::mem::size_of::<libc::cpu_set_t>(), &set) })
+}
+
+/// The CPUs the calling thread may run on.
+pub fn affinity() -> io::Result<Vec<usize>> {
+    // SAFETY: an all-zero `cpu_set_t` is the empty set.
+    let mut set: libc::cpu_set_t = unsafe { std::mem::zeroed() };
+    // SAFETY: `set` is a valid, writable cpu_set_t of the size passed; pid 0 = calling thread.
+    check(unsafe { libc::sched_getaffinity(0, std::mem::size_of::<libc::cpu_set_t>(), &mut set) })?;
+    let max = 8 * std::mem::size_of::<libc::cpu_set_t>();
+    // SAFETY: every index is below the set's capacity; `set` was filled by the kernel.
+    Ok((0..max)
+        .filter(|&c| unsafe { libc::CPU_ISSET(c, &set) })
+        .collect())
+}
+
+/// `CLOCK_MONOTONIC` now, nanoseconds.
+pub fn monotonic_ns() -> u64 {
+    let mut ts = libc::timespec {
+        tv_sec: 0,
+        tv_nsec: 0,
+    };
+    // SAFETY: `ts` is a valid, writable timespec; CLOCK_MONOTONIC always exists on Linux, so
+    // the call cannot fail (EFAULT/EINVAL are impossible here).
+    unsafe { libc::clock_gettime(libc::CLOCK_MONOTONIC, &mut ts) };
+    ts.tv_sec as u64 * 1_000_000_000 + ts.tv_nsec as u64
+}
+
+/// Sleep until `CLOCK_MONOTONIC` reaches `deadline_ns` (absolute, `TIMER_ABSTIME`), resuming
+/// after signal interruptions. Returns at once if the deadline has passed.
+pub fn sleep_until_ns(deadline_ns: u64) -> io::Result<()> {
+    let ts = libc::timespec {
+        tv_sec: (deadline_ns / 1_000_000_000) as libc::time_t,
+        tv_nsec: (deadline_ns % 1_000_000_000) as libc::c_long,
+    };
+    loop {
+        // SAFETY: `ts` is a valid timespec; with TIMER_ABSTIME the remaining-time pointer is
+        // unused and may be null.
+        let r = unsafe {
+            libc::clock_nanosleep(
+                libc::CLOCK_MONOTONIC,
+                libc::TIMER_ABSTIME,
+                &ts,
+                std::ptr::null_mut(),
+            )
+        };
+        match r {
+            0 => return Ok(()),
+            libc::EINTR => continue,
+            e => return Err(io::Error::from_raw_os_error(e)),
+        }
+    }
+}
+
+/// Resolution of `CLOCK_MONOTONIC`, nanoseconds.
+pub fn monotonic_resolution_ns() -> io::Result<u64> {
+    let mut ts = libc::timespec {
+        tv_sec: 0,
+        tv_nsec: 0,
+    };
+    // SAFETY: `ts` is a valid, writable timespec.
+    check(unsafe { libc::clock_getres(libc::CLOCK_MONOTONIC, &mut ts) })?;
+    Ok(ts.tv_sec as u64 * 1_000_000_000 + ts.tv_nsec as u64)
+}
+
+/// `access(path, R_OK | W_OK | X_OK)`: the calling user may create files in directory `path`.
+pub fn dir_writable(path: &std::path::Path) -> io::Result<()> {
+    use std::os::unix::ffi::OsStrExt;
+    let c = std::ffi::CString::new(path.as_os_str().as_bytes())
+        .map_err(|_| io::Error::from_raw_os_error(libc::EINVAL))?;
+    // SAFETY: `c` is a NUL-terminated path that outlives the call; access only reads it.
+    check(unsafe { libc::access(c.as_ptr(), libc::R_OK | libc::W_OK | libc::X_OK) })
+}
+
+/// Size and free space (bytes available to this user) of the filesystem holding `path`.
+pub fn fs_space(path: &std::path::Path) -> io::Result<(u64, u64)> {
+    use std::os::unix::ffi::OsStrExt;
+    let c = std::ffi::CString::new(path.as_os_str().as_bytes())
+        .map_err(|_| io::Error::from_raw_os_error(libc::EINVAL))?;
+    // SAFETY: an all-zero `statvfs` is a valid value of this plain C struct.
+    let mut st: libc::statvfs = unsafe { std::mem::zeroed() };
+    // SAFETY: `c` is a NUL-terminated path that outlives the call; `st` is valid and writable.
+    check(unsafe { libc::statvfs(c.as_ptr(), &mut st) })?;
+    let frsize = st.f_frsize as u64;
+    Ok((st.f_blocks as u64 * frsize, st.f_bavail as u64 * frsize))
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn clock_is_monotonic_and_sleep_reaches_deadline() {
+        let t0 = monotonic_ns();
+        sleep_until_ns(t0 + 1_000_000).unwrap();
+        assert!(monotonic_ns() >= t0 + 1_000_000);
+        // A deadline in the past returns at once.
+        sleep_until_ns(t0).unwrap();
+        let res = monotonic_resolution_ns().unwrap();
+        assert!((1..=10_000_000).contains(&res), "{res}");
+    }
+
+    #[test]
+    fn affinity_roundtrip_and_nice_on_scratch_thread() {
+        std::thread::spawn(|| {
+            let cpus = affinity().unwrap();
+            assert!(!cpus.is_empty());
+            set_affinity(&cpus[..1]).unwrap();
+            assert_eq!(affinity().unwrap(), vec![cpus[0]]);
+            // Raising one's own nice value is always permitted.
+            set_nice(19).unwrap();
+            assert_eq!(nice().unwrap(), 19);
+            assert!(set_affinity(&[100_000]).is_err());
+        })
+        .join()
+        .unwrap();
+    }
+
+    #[test]
+    fn idle_policy_is_always_permitted() {
+        std::thread::spawn(|| {
+            set_idle().unwrap();
+            assert_eq!(current_policy().unwrap(), libc::SCHED_IDLE);
+        })
+        .join()
+        .unwrap();
+    }
+}
 
 /// Send signal `sig` (e.g. `libc::SIGINT`) to process `pid`.
 pub fn send_signal(pid: u32, sig: i32) -> io::Result<()> {
     let pid =
         libc::pid_t::try_from(pid).map_err(|_| io::Error::from(io::ErrorKind::InvalidInput))?;
     // SAFETY: kill(2) takes plain integers and has no memory-safety preconditions.
-    let rc = unsafe { libc::kill(pid, sig) };
-    if rc == 0 {
-        Ok(())
-    } else {
-        Err(io::Error::last_os_error())
-    }
+    check(unsafe { libc::kill(pid, sig) })
 }

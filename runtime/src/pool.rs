@@ -1,1 +1,324 @@
-//! Placeholder for the pool module.
+//! The low-priority worker pool: a rayon `ThreadPool` whose threads lower their own priority at
+//! start (`SCHED_IDLE` if permitted, else nice 19), with a submission API that never blocks the
+//! caller and a bounded crossbeam channel carrying results back.
+//!
+//! Bounding: at most `queue` jobs are *outstanding* (submitted and not yet collected with
+//! [`WorkerPool::try_recv`]). [`WorkerPool::try_submit`] returns [`Busy`] (handing the job back)
+//! instead of waiting when that limit is reached, and because the result channel has the same
+//! capacity a worker can always deliver its result without blocking either. The LBV thread
+//! (SCHED_FIFO) therefore never waits on the pool. Jobs may use rayon parallelism inside (it runs
+//! on this pool's threads). A panicking job yields `Err(JobPanicked)` instead of aborting.
+//!
+//! Allocation: `try_submit` boxes the job (rayon's queue), one small allocation per submission.
+
+use crate::config::{Checker, ConfigError};
+use crossbeam::channel::{Receiver, Sender};
+use serde::Deserialize;
+use std::fmt;
+use std::panic::AssertUnwindSafe;
+use std::sync::Arc;
+use std::sync::atomic::{AtomicU64, AtomicUsize, Ordering};
+use std::time::Duration;
+
+/// How pool threads lower their priority.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Deserialize)]
+#[serde(rename_all = "snake_case")]
+pub enum PoolPriority {
+    /// `SCHED_IDLE` (runs only on otherwise idle CPU time); falls back to `nice` if refused.
+    Idle,
+    /// Nice value `nice` only.
+    Nice,
+}
+
+/// `[executor.pool]` section.
+#[derive(Debug, Clone, PartialEq, Eq, Deserialize)]
+#[serde(deny_unknown_fields, default)]
+pub struct PoolConfig {
+    /// Worker threads (0 = one per CPU).
+    pub threads: usize,
+    /// Outstanding jobs (queued + running + uncollected results) before `try_submit` says Busy.
+    pub queue: usize,
+    /// Priority scheme.
+    pub priority: PoolPriority,
+    /// Nice value (0..=19) for `nice`, and the fallback when `SCHED_IDLE` is refused.
+    pub nice: i32,
+}
+
+impl Default for PoolConfig {
+    fn default() -> Self {
+        Self {
+            threads: 0,
+            queue: 16,
+            priority: PoolPriority::Idle,
+            nice: 19,
+        }
+    }
+}
+
+impl PoolConfig {
+    /// Range-check.
+    pub fn validate(&self, c: &Checker) -> Result<(), ConfigError> {
+        c.count("executor.pool.threads", self.threads, 0, 256)?;
+        c.count("executor.pool.queue", self.queue, 1, 65_536)?;
+        c.require(
+            (0..=19).contains(&self.nice),
+            "executor.pool.nice",
+            self.nice,
+            "must be in [0, 19] (pool threads only lower their priority)",
+        )
+    }
+}
+
+/// What priority one worker thread ended up with.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum WorkerPriority {
+    /// `SCHED_IDLE`.
+    Idle,
+    /// `SCHED_OTHER` at this nice value.
+    Nice(i32),
+}
+
+/// Lower the calling thread's priority per `cfg`; never fails (refusals are logged once).
+pub fn lower_priority(cfg: &PoolConfig) -> WorkerPriority {
+    if cfg.priority == PoolPriority::Idle {
+        match crate::os::set_idle() {
+            Ok(()) => return WorkerPriority::Idle,
+            Err(e) => crate::executor::log_once(
+                "sched_idle",
+                &format!(
+                    "SCHED_IDLE refused for pool threads ({e}); using nice {}",
+                    cfg.nice
+                ),
+            ),
+        }
+    }
+    if let Err(e) = crate::os::set_nice(cfg.nice) {
+        crate::executor::log_once(
+            "pool_nice",
+            &format!("nice {} refused for pool threads ({e})", cfg.nice),
+        );
+    }
+    WorkerPriority::Nice(crate::os::nice().unwrap_or(0))
+}
+
+/// Identifies a submitted job (increasing from 1 per pool).
+pub type JobId = u64;
+
+/// A job panicked; the payload message if it was a string.
+#[derive(Debug, Clone, PartialEq, Eq, thiserror::Error)]
+#[error("pool job panicked: {0}")]
+pub struct JobPanicked(pub String);
+
+/// A finished job.
+#[derive(Debug)]
+pub struct Done<R> {
+    /// The id [`WorkerPool::try_submit`] returned.
+    pub id: JobId,
+    /// Its result.
+    pub result: Result<R, JobPanicked>,
+}
+
+/// The pool is at its outstanding-job limit; the job is handed back unchanged.
+pub struct Busy<F>(pub F);
+
+impl<F> fmt::Debug for Busy<F> {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        f.write_str("Busy(..)")
+    }
+}
+
+impl<F> fmt::Display for Busy<F> {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        f.write_str("worker pool busy: outstanding-job limit reached")
+    }
+}
+
+/// Why the pool could not be built.
+#[derive(Debug, thiserror::Error)]
+pub enum PoolError {
+    /// rayon could not start the threads.
+    #[error("worker pool '{name}': cannot build: {reason}")]
+    Build {
+        /// Pool name.
+        name: String,
+        /// rayon's reason.
+        reason: String,
+    },
+    /// Not every worker reported its start within 10 s.
+    #[error("worker pool '{name}': only {started} of {threads} threads started")]
+    Start {
+        /// Pool name.
+        name: String,
+        /// Threads that reported.
+        started: usize,
+        /// Threads requested.
+        threads: usize,
+    },
+}
+
+/// A low-priority pool computing `R`s off the caller's thread.
+pub struct WorkerPool<R: Send + 'static> {
+    name: String,
+    pool: rayon::ThreadPool,
+    tx: Sender<Done<R>>,
+    rx: Receiver<Done<R>>,
+    outstanding: Arc<AtomicUsize>,
+    capacity: usize,
+    next_id: AtomicU64,
+    priorities: Vec<WorkerPriority>,
+}
+
+impl<R: Send + 'static> fmt::Debug for WorkerPool<R> {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        f.debug_struct("WorkerPool")
+            .field("name", &self.name)
+            .field("threads", &self.priorities.len())
+            .field("capacity", &self.capacity)
+            .field("outstanding", &self.outstanding())
+            .finish_non_exhaustive()
+    }
+}
+
+impl<R: Send + 'static> WorkerPool<R> {
+    /// Start the pool; threads are named `<name>-<i>`. Returns once every thread has lowered
+    /// its priority.
+    pub fn new(name: &str, cfg: &PoolConfig) -> Result<Self, PoolError> {
+        let threads = if cfg.threads == 0 {
+            std::thread::available_parallelism().map_or(1, |n| n.get())
+        } else {
+            cfg.threads
+        };
+        let (started_tx, started_rx) = crossbeam::channel::bounded(threads);
+        let prio_cfg = cfg.clone();
+        let thread_prefix = name.to_string();
+        let pool = rayon::ThreadPoolBuilder::new()
+            .num_threads(threads)
+            .thread_name(move |i| format!("{thread_prefix}-{i}"))
+            .start_handler(move |_| {
+                let _ = started_tx.try_send(lower_priority(&prio_cfg));
+            })
+            .build()
+            .map_err(|e| PoolError::Build {
+                name: name.into(),
+                reason: e.to_string(),
+            })?;
+        let mut priorities = Vec::with_capacity(threads);
+        while priorities.len() < threads {
+            match started_rx.recv_timeout(Duration::from_secs(10)) {
+                Ok(p) => priorities.push(p),
+                Err(_) => {
+                    return Err(PoolError::Start {
+                        name: name.into(),
+                        started: priorities.len(),
+                        threads,
+                    });
+                }
+            }
+        }
+        let (tx, rx) = crossbeam::channel::bounded(cfg.queue);
+        Ok(Self {
+            name: name.into(),
+            pool,
+            tx,
+            rx,
+            outstanding: Arc::new(AtomicUsize::new(0)),
+            capacity: cfg.queue,
+            next_id: AtomicU64::new(1),
+            priorities,
+        })
+    }
+
+    /// Queue `job` unless `queue` jobs are outstanding; never blocks.
+    pub fn try_submit<F>(&self, job: F) -> Result<JobId, Busy<F>>
+    where
+        F: FnOnce() -> R + Send + 'static,
+    {
+        let reserved = self
+            .outstanding
+            .fetch_update(Ordering::AcqRel, Ordering::Acquire, |n| {
+                (n < self.capacity).then_some(n + 1)
+            });
+        if reserved.is_err() {
+            return Err(Busy(job));
+        }
+        let id = self.next_id.fetch_add(1, Ordering::Relaxed);
+        let tx = self.tx.clone();
+        self.pool.spawn(move || {
+            let result = std::panic::catch_unwind(AssertUnwindSafe(job)).map_err(|p| {
+                JobPanicked(
+                    p.downcast_ref::<&str>()
+                        .map(|s| s.to_string())
+                        .or_else(|| p.downcast_ref::<String>().cloned())
+                        .unwrap_or_else(|| "non-string panic payload".into()),
+                )
+            });
+            // Cannot be full: outstanding ≤ capacity = channel capacity. If the pool's owner is
+            // gone the result is simply dropped.
+            let _ = tx.try_send(Done { id, result });
+        });
+        Ok(id)
+    }
+
+    /// A finished job's result, if one is ready; never blocks.
+    pub fn try_recv(&self) -> Option<Done<R>> {
+        let done = self.rx.try_recv().ok()?;
+        self.outstanding.fetch_sub(1, Ordering::AcqRel);
+        Some(done)
+    }
+
+    /// Wait up to `timeout` for a result (for hosts and tests that may block; the LBV thread
+    /// uses [`WorkerPool::try_recv`]).
+    pub fn recv_timeout(&self, timeout: Duration) -> Option<Done<R>> {
+        let done = self.rx.recv_timeout(timeout).ok()?;
+        self.outstanding.fetch_sub(1, Ordering::AcqRel);
+        Some(done)
+    }
+
+    /// Jobs submitted and not yet collected.
+    pub fn outstanding(&self) -> usize {
+        self.outstanding.load(Ordering::Acquire)
+    }
+
+    /// The outstanding-job limit.
+    pub fn capacity(&self) -> usize {
+        self.capacity
+    }
+
+    /// The priority each worker thread got.
+    pub fn priorities(&self) -> &[WorkerPriority] {
+        &self.priorities
+    }
+
+    /// Run `op` inside the pool (rayon parallel iterators in `op` use this pool's threads);
+    /// blocks the caller — not for the LBV thread.
+    pub fn install<T: Send, OP: FnOnce() -> T + Send>(&self, op: OP) -> T {
+        self.pool.install(op)
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn panics_become_errors_and_ids_increase() {
+        let cfg = PoolConfig {
+            threads: 1,
+            queue: 2,
+            ..PoolConfig::default()
+        };
+        let pool = WorkerPool::<u32>::new("t-panic", &cfg).unwrap();
+        assert_eq!(pool.priorities().len(), 1);
+        let a = pool.try_submit(|| panic!("boom")).unwrap();
+        let b = pool.try_submit(|| 7).unwrap();
+        assert!(b > a);
+        let mut got = [
+            pool.recv_timeout(Duration::from_secs(10)).unwrap(),
+            pool.recv_timeout(Duration::from_secs(10)).unwrap(),
+        ];
+        got.sort_by_key(|d| d.id);
+        assert_eq!(got[0].result, Err(JobPanicked("boom".into())));
+        assert_eq!(got[1].result, Ok(7));
+        assert_eq!(pool.outstanding(), 0);
+    }
+}

@@ -17,10 +17,12 @@
 //! with [`boxed_zeroed`] without building it on the stack).
 
 mod classes;
+mod message;
 mod messages;
 mod validate;
 
 pub use classes::{COCO_CLASSES, ClassId, class_id, class_name, is_background_class};
+pub use message::{Message, init_zeroed};
 pub use messages::*;
 pub use validate::{Validate, ValidationError};
 

@@ -1,0 +1,54 @@
+//! Quick measurement of what the runtime gets on this machine:
+//! 1. periodic-executor wake-up lateness at 1 kHz with and without the spin margin;
+//! 2. in-process zero-copy `DepthFrame` loan → fill header → send → receive latency.
+//!
+//! `cargo run -p runtime --release --example rt_probe [cycles]`
+//! (the jitter harness in `rt_tests` is the reference; this is a smoke-level probe).
+
+use runtime::executor::{Control, Cycle, Executor, ExecutorConfig};
+use runtime::ports::{PortContext, PortsConfig, Stamp};
+use shm_types::DepthFrame;
+use std::time::{Duration, Instant};
+
+fn main() -> Result<(), Box<dyn std::error::Error>> {
+    let cycles: u64 = std::env::args()
+        .nth(1)
+        .and_then(|s| s.parse().ok())
+        .unwrap_or(2000);
+    for margin_us in [0u64, 200] {
+        let cfg = ExecutorConfig {
+            spin_margin_us: margin_us,
+            ..ExecutorConfig::default()
+        };
+        let h = Executor::builder("probe-1khz", Duration::from_millis(1))
+            .config(&cfg)
+            .max_cycles(cycles)
+            .spawn(|| |_: &Cycle| Control::Continue)?;
+        let s = h.wait()?;
+        println!("spin margin {margin_us} µs: {s}");
+    }
+
+    let ns = format!("probe{}", std::process::id());
+    let ctx = PortContext::with_namespace(&PortsConfig::default(), "probe", &ns)?;
+    let sub = ctx.subscriber::<DepthFrame>("depth")?;
+    let publ = ctx.publisher::<DepthFrame>("depth")?;
+    let mut hist = hdrhistogram::Histogram::<u64>::new_with_bounds(1, 1_000_000_000, 3)?;
+    for k in 0..cycles.min(2000) {
+        let t0 = Instant::now();
+        let mut f = publ.loan()?; // includes zero-filling 600 KB in place
+        f.width = 640;
+        f.height = 480;
+        f.send(Stamp {
+            source_ns: k,
+            sim_ns: k,
+        })?;
+        let r = sub.wait(Duration::from_secs(1))?.ok_or("lost")?;
+        std::hint::black_box(r.header().seq);
+        hist.saturating_record(t0.elapsed().as_nanos() as u64);
+    }
+    println!(
+        "DepthFrame loan+zero+send+receive (in-process): {}",
+        runtime::executor::Stats::of(&hist)
+    );
+    Ok(())
+}
