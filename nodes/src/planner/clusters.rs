@@ -49,6 +49,9 @@ pub struct ClusterInfo {
     pub foreground_done: u32,
     /// Whether the cluster is done (see module docs).
     pub done: bool,
+    /// Sectors (bit mask, see [`SideTracker`]) from which the cluster was seen; filled by
+    /// [`clusters`] and [`first_unfinished`], 0 from [`cluster_info`].
+    pub sides_seen: u64,
 }
 
 /// Geometry of cluster `id` (centre, footprint radius, earliest sighting, fg counts); `None` if
@@ -82,6 +85,7 @@ pub fn cluster_info(map: &ObjectMap, id: i32, eps_sopm: f32) -> Option<ClusterIn
         foreground: fg,
         foreground_done: done,
         done: fg > 0 && done == fg,
+        sides_seen: 0,
     })
 }
 
@@ -99,6 +103,7 @@ pub fn clusters(
         .filter(|o| o.is_background())
         .filter_map(|o| cluster_info(map, o.id as i32, eps_sopm))
         .map(|mut c| {
+            c.sides_seen = sides.mask(c.id);
             if c.foreground == 0 {
                 c.done = sides.sides(c.id) >= min_sides;
             }
@@ -126,6 +131,7 @@ pub fn first_unfinished(
         let Some(mut c) = cluster_info(map, id, eps_sopm) else {
             continue;
         };
+        c.sides_seen = sides.mask(id);
         if c.foreground == 0 {
             c.done = sides.sides(id) >= min_sides;
         }
@@ -170,17 +176,29 @@ impl SideTracker {
         }
     }
 
-    /// Record the view: every background object whose centre it sees gets the sector of the
-    /// camera's bearing from the centre marked.
+    /// Number of sectors.
+    pub fn sectors(&self) -> usize {
+        self.sectors
+    }
+
+    /// Sector of a bearing `from − center` (xy).
+    pub fn sector_of(&self, center: Vec3, from: Vec3) -> usize {
+        let d = from - center;
+        let a = d.y.atan2(d.x).rem_euclid(std::f32::consts::TAU);
+        ((a / std::f32::consts::TAU * self.sectors as f32) as usize) % self.sectors
+    }
+
+    /// Record the view: every background object the view sees gets the sector of the camera's
+    /// bearing from its centre marked. "Sees" = the centre of its top face is in the frustum and
+    /// range (a pitched-down camera near a low object may not see the object's centre).
     pub fn observe(&mut self, map: &ObjectMap, camera: &Camera, view: &View) {
         for o in map.objects().iter().filter(|o| o.is_background()) {
             let c = Vec3::from(o.center);
-            if !view.sees(camera, c) {
+            let top = c + Vec3::Z * (0.5 * o.size[2]);
+            if !view.sees(camera, top) {
                 continue;
             }
-            let d = view.position - c;
-            let a = d.y.atan2(d.x).rem_euclid(std::f32::consts::TAU);
-            let s = ((a / std::f32::consts::TAU * self.sectors as f32) as usize) % self.sectors;
+            let s = self.sector_of(c, view.position);
             self.mark(o.id as i32, s);
         }
     }
@@ -195,6 +213,14 @@ impl SideTracker {
             self.masks[self.len] = bit;
             self.len += 1;
         }
+    }
+
+    /// Bit mask of the sectors cluster `id` was seen from.
+    pub fn mask(&self, id: i32) -> u64 {
+        self.ids[..self.len]
+            .iter()
+            .position(|i| *i == id)
+            .map_or(0, |k| self.masks[k])
     }
 
     /// Number of distinct sectors cluster `id` was seen from.

@@ -105,6 +105,7 @@ mod tests {
             foreground: 0,
             foreground_done: 0,
             done: false,
+            sides_seen: 0,
         };
         let p = CoverageParams {
             waypoints: 4,

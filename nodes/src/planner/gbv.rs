@@ -5,8 +5,10 @@
 //! (neck yaw 0, the mount's pitch), so the camera's line of sight goes to the centre. Poses in
 //! collision or unreachable on the inflated navigation grid are dropped; the rest are evaluated
 //! in parallel (rayon, on whatever pool runs the job) with α = 1, β = 0.2 and the tracked
-//! cluster as the f_c target. If every candidate of a cluster is dropped, the next unfinished
-//! cluster is tried within the same round. The best candidate becomes the [`NavGoal`].
+//! cluster as the f_c target. For a cluster without any foreground object yet (f_a is 0 there),
+//! candidates in sectors it was already seen from are dropped too, so that successive rounds
+//! look at it from new sides (see [`crate::planner::clusters`]). If every candidate of a cluster
+//! is dropped, the next unfinished cluster is tried within the same round. The best candidate becomes the [`NavGoal`].
 //!
 //! [`GbvJob`] owns copies of its inputs (`Send + 'static`) so a host can run it on a
 //! low-priority pool and poll for the [`GbvResult`], which hands the buffers back for reuse.
@@ -36,6 +38,8 @@ pub struct GbvParams {
     pub robot_radius: f32,
     /// Whether UNKNOWN navigation cells are traversable.
     pub nav_unknown_traversable: bool,
+    /// Angular sectors around a cluster (`bootstrap.sectors`).
+    pub sectors: usize,
 }
 
 /// `N` base poses `[x, y, yaw]` evenly on the ring around a cluster, each facing its centre;
@@ -137,8 +141,19 @@ impl GbvJob {
                 p.safe_distance,
                 [self.base[0], self.base[1]],
             );
-            let (ok, dropped): (Vec<[f32; 3]>, Vec<[f32; 3]>) =
-                poses.iter().partition(|b| nav.reachable([b[0], b[1]]));
+            let sectors = p.sectors.clamp(1, 64);
+            let fresh = |b: &[f32; 3]| {
+                if info.foreground > 0 {
+                    return true;
+                }
+                let d = glam::Vec2::new(b[0] - info.center.x, b[1] - info.center.y);
+                let a = d.y.atan2(d.x).rem_euclid(TAU);
+                let s = ((a / TAU * sectors as f32) as usize) % sectors;
+                info.sides_seen & (1u64 << s) == 0
+            };
+            let (ok, dropped): (Vec<[f32; 3]>, Vec<[f32; 3]>) = poses
+                .iter()
+                .partition(|b| fresh(b) && nav.reachable([b[0], b[1]]));
             if ok.is_empty() {
                 unreachable.push(info.id);
                 continue;

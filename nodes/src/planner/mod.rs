@@ -17,6 +17,7 @@
 //! | [`frontier`], [`coverage`] | baseline algorithms as jobs |
 //! | [`vpsom`], [`baselines`] | the three planners (state machines) |
 //! | [`session`] | the interface: inputs, [`Step`], jobs, status, [`Summary`] |
+//! | [`synth`] | synthetic maps (scene-3-like) for benchmarks and tests |
 //!
 //! # Hosting (how the lead's host drives a planner)
 //! ```text
@@ -62,6 +63,7 @@ pub mod gbv;
 pub mod lbv;
 pub mod reach;
 pub mod session;
+pub mod synth;
 pub mod terms;
 pub mod vpsom;
 

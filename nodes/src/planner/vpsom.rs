@@ -90,6 +90,7 @@ impl VpsomPlanner {
             safe_distance: cfg.gbv.safe_distance,
             robot_radius: cfg.robot_radius,
             nav_unknown_traversable: cfg.nav_unknown_traversable,
+            sectors: cfg.bootstrap.sectors,
         };
         Self {
             cfg: cfg.clone(),
