@@ -221,8 +221,10 @@ impl FakeWorld {
 
 /// Run a planner to its end; returns the final summary and the world.
 fn run(kind: PlannerKind, start: [f32; 3]) -> (nodes::planner::Summary, FakeWorld) {
-    let mut cfg = PlannerConfig::default();
-    cfg.kind = kind;
+    let cfg = PlannerConfig {
+        kind,
+        ..Default::default()
+    };
     let mut planner = make_planner(&cfg, &CameraConfig::default());
     let mut w = FakeWorld::new(start);
     let mut last_id = 0;

@@ -116,7 +116,7 @@ pub fn frontiers(g: &OccupancyGrid, blacklist: &[[f32; 2]], p: &FrontierParams) 
             });
         }
     }
-    out.sort_by(|a, b| b.cells.len().cmp(&a.cells.len()));
+    out.sort_by_key(|f| std::cmp::Reverse(f.cells.len()));
     out
 }
 

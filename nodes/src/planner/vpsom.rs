@@ -214,7 +214,7 @@ impl ViewPlanner for VpsomPlanner {
             clusters::clusters(inputs.map, eps, &self.sides, self.min_sides());
         if self.goals.poll(inputs.state) == Outcome::Pending {
             // A frontier goal is superseded as soon as a cluster is known.
-            if !(self.mode == Mode::Explore && !all.is_empty()) {
+            if self.mode != Mode::Explore || all.is_empty() {
                 return Step::Wait;
             }
         }
