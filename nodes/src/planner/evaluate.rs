@@ -222,7 +222,12 @@ pub fn evaluate_view(
     } else {
         ContinuityTerms::default()
     };
-    let (yaw, pitch) = yaw_pitch_of(world_from_camera);
+    candidate(&view, &a, &c, w)
+}
+
+/// The traced candidate of a view from its terms.
+pub fn candidate(view: &View, a: &AbundanceTerms, c: &ContinuityTerms, w: Weights) -> Candidate {
+    let (yaw, pitch) = yaw_pitch_of(&view.world_from_camera);
     Candidate {
         position: view.position.to_array(),
         yaw,
@@ -240,6 +245,63 @@ pub fn evaluate_view(
         chosen: 0,
         dropped: 0,
     }
+}
+
+/// For views that share one camera position (the neck turns about a vertical axis through the
+/// optical centre's column, so all LBV candidates of a base pose do): the offsets `p − camera`
+/// of the tracked cluster's sample points that pass the co-visibility angle test from there
+/// (the angle test depends on the position only). Appends to `out` without reallocating if
+/// `out` has room for all the map's sample points.
+pub fn covisible_offsets(
+    map: &ObjectMap,
+    target: &Target,
+    camera: Vec3,
+    cos_thresh: f32,
+    out: &mut Vec<Vec3>,
+) {
+    for o in map
+        .objects()
+        .iter()
+        .filter(|o| o.cluster_id == target.cluster_id)
+    {
+        for (pt, los) in o.samples() {
+            let d = Vec3::from(*pt) - camera;
+            if terms::cos_between(d, Vec3::from(*los)).is_some_and(|c| c > cos_thresh) {
+                out.push(d);
+            }
+        }
+    }
+}
+
+/// [`continuity`] for a view at the position `offsets` were computed from: only the frustum
+/// and range tests remain per point.
+pub fn continuity_from_offsets(
+    view: &View,
+    offsets: &[Vec3],
+    target: Option<&Target>,
+    p: &EvalParams,
+) -> ContinuityTerms {
+    let Some(target) = target else {
+        return ContinuityTerms::default();
+    };
+    let mut t = ContinuityTerms::default();
+    if p.ablation.n_cp {
+        let r = view.cam_from_world.matrix3;
+        t.covisible = offsets
+            .iter()
+            .filter(|d| p.camera.sees(Vec3::from(r * glam::Vec3A::from(**d))))
+            .count() as u32;
+        t.n_cp = terms::n_cp(t.covisible as usize, p.eps_cp, true);
+    } else {
+        t.n_cp = 1.0;
+    }
+    t.cos_theta_c = if p.ablation.theta_c {
+        terms::cos_theta_c(view, target.centroid)
+    } else {
+        1.0
+    };
+    t.f_c = terms::f_c(t.n_cp, t.cos_theta_c);
+    t
 }
 
 #[cfg(test)]
@@ -393,5 +455,31 @@ mod tests {
         );
         assert_eq!(lbv.f_a, 0.0);
         assert_eq!(lbv.objects_in_view, 0, "f_a is skipped when α = 0");
+    }
+
+    #[test]
+    fn offsets_path_equals_the_generic_one() {
+        let map = crate::planner::synth::scene3_map();
+        let p = params();
+        let target = Target {
+            cluster_id: 1,
+            centroid: Vec3::new(-1.6, 0.2, 0.8),
+        };
+        let mount = p.mount;
+        let base = [-0.5, 0.3, 3.0];
+        let cam = Vec3::from(mount.camera_pose(base, 0.0, mount.pitch()).translation);
+        let mut off = Vec::new();
+        covisible_offsets(&map, &target, cam, p.cos_thresh, &mut off);
+        let mut any = 0;
+        for k in 0..36 {
+            let pose = mount.camera_pose(base, k as f32 * 0.17, mount.pitch());
+            let v = View::new(pose);
+            let a = continuity(&map, &v, Some(&target), &p);
+            let b = continuity_from_offsets(&v, &off, Some(&target), &p);
+            assert_eq!(a.covisible, b.covisible, "yaw step {k}");
+            assert_eq!(a.f_c, b.f_c);
+            any += a.covisible;
+        }
+        assert!(any > 0);
     }
 }

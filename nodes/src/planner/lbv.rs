@@ -15,8 +15,16 @@
 use crate::config::CameraConfig;
 use crate::geom::wrap_angle;
 use crate::planner::config::PlannerConfig;
-use crate::planner::evaluate::{EvalParams, Target, Weights, evaluate_view};
-use shm_types::{Candidate, MAX_CANDIDATES, ObjectMap, PlannerDecision, decision_kind};
+use crate::planner::evaluate::{
+    AbundanceTerms, ContinuityTerms, EvalParams, Target, Weights, abundance, candidate,
+    continuity_from_offsets, covisible_offsets, evaluate_view,
+};
+use crate::planner::terms::View;
+use glam::Vec3;
+use shm_types::{
+    Candidate, MAX_CANDIDATES, MAX_OBJECT_POINTS, MAX_OBJECTS, ObjectMap, PlannerDecision,
+    decision_kind,
+};
 
 /// The chosen neck goal.
 #[derive(Debug, Clone, Copy, PartialEq)]
@@ -55,6 +63,7 @@ pub struct Lbv {
     weights: Weights,
     yaws: Vec<f32>,
     cands: Vec<Candidate>,
+    offsets: Vec<Vec3>,
 }
 
 impl Lbv {
@@ -83,6 +92,7 @@ impl Lbv {
             weights,
             yaws,
             cands,
+            offsets: Vec::with_capacity(MAX_OBJECTS * MAX_OBJECT_POINTS),
         }
     }
 
@@ -106,16 +116,34 @@ impl Lbv {
         target: Option<&Target>,
     ) -> Option<LbvChoice> {
         self.cands.clear();
+        self.offsets.clear();
         let pitch = self.params.mount.pitch();
+        let w = self.weights;
+        // All neck yaws share the camera position: the angle test of co-visibility is done once.
+        let origin = Vec3::from(self.params.mount.camera_pose(base, 0.0, pitch).translation);
+        if let Some(t) = target.filter(|_| w.beta != 0.0 && self.params.ablation.n_cp) {
+            covisible_offsets(map, t, origin, self.params.cos_thresh, &mut self.offsets);
+        }
         for &yaw in &self.yaws {
             let pose = self.params.mount.camera_pose(base, yaw, pitch);
-            self.cands.push(evaluate_view(
-                map,
-                &pose,
-                target,
-                self.weights,
-                &self.params,
-            ));
+            let view = View::new(pose);
+            if view.position.distance(origin) > 1e-5 {
+                // A mount whose optical centre moves with the neck: generic path.
+                self.cands
+                    .push(evaluate_view(map, &pose, target, w, &self.params));
+                continue;
+            }
+            let a = if w.alpha != 0.0 {
+                abundance(map, &view, &self.params)
+            } else {
+                AbundanceTerms::default()
+            };
+            let c = if w.beta != 0.0 {
+                continuity_from_offsets(&view, &self.offsets, target, &self.params)
+            } else {
+                ContinuityTerms::default()
+            };
+            self.cands.push(candidate(&view, &a, &c, w));
         }
         let max = self
             .cands

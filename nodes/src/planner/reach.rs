@@ -51,9 +51,23 @@ impl NavMap {
         let mut blocked = hard.clone();
         let r = (radius / res).ceil() as isize;
         let r2 = (radius / res) * (radius / res);
+        // Only obstacle cells with a free 8-neighbour are stamped: the obstacle cell nearest to
+        // any free cell is always such a boundary cell, so the result is the same.
+        let boundary = |ix: isize, iy: isize| {
+            (-1..=1isize).any(|dy| {
+                (-1..=1isize).any(|dx| {
+                    let (x, y) = (ix + dx, iy + dy);
+                    x >= 0
+                        && y >= 0
+                        && (x as usize) < w
+                        && (y as usize) < h
+                        && !hard[y as usize * w + x as usize]
+                })
+            })
+        };
         for iy in 0..h as isize {
             for ix in 0..w as isize {
-                if !hard[iy as usize * w + ix as usize] {
+                if !hard[iy as usize * w + ix as usize] || !boundary(ix, iy) {
                     continue;
                 }
                 for dy in -r..=r {
