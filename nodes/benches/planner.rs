@@ -7,6 +7,11 @@
 //! printed, since the target is a tail figure.
 //!
 //! Run: `cargo bench -p nodes --bench planner`.
+//!
+//! Recorded (2 shared vCPUs, other builds running; `-- --warm-up-time 1 --measurement-time 3`):
+//! LBV 18: mean 36 µs, single-call p50 21 µs / p99 37 µs; LBV 360: mean 0.65 ms (p50 0.60 ms);
+//! GBV eval 36 on 2 threads: 0.34 ms; 1000: 8.0 ms; whole GBV job with a 256 × 256 grid
+//! (inflation + Dijkstra + 36 candidates): 2.4 ms.
 
 use criterion::{Criterion, criterion_group};
 use nodes::config::CameraConfig;

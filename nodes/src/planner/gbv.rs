@@ -8,7 +8,8 @@
 //! cluster as the f_c target. For a cluster without any foreground object yet (f_a is 0 there),
 //! candidates in sectors it was already seen from are dropped too, so that successive rounds
 //! look at it from new sides (see [`crate::planner::clusters`]). If every candidate of a cluster
-//! is dropped, the next unfinished cluster is tried within the same round. The best candidate becomes the [`NavGoal`].
+//! is dropped, the next unfinished cluster is tried within the same round. The best candidate
+//! becomes the [`NavGoal`](shm_types::NavGoal).
 //!
 //! [`GbvJob`] owns copies of its inputs (`Send + 'static`) so a host can run it on a
 //! low-priority pool and poll for the [`GbvResult`], which hands the buffers back for reuse.
