@@ -11,16 +11,29 @@ use nodes::planner::synth::scene3_map;
 use nodes::planner::{Lbv, PlannerConfig, Target, ViewPlanner, VpsomPlanner};
 use shm_types::{PlannerDecision, RobotState, boxed_zeroed};
 use std::alloc::{GlobalAlloc, Layout, System};
+use std::cell::Cell;
+use std::hint::black_box;
 use std::sync::atomic::{AtomicU64, Ordering};
 
 struct Counting;
 
 static ALLOCS: AtomicU64 = AtomicU64::new(0);
 
+thread_local! {
+    /// Count only this thread's allocations (the test harness allocates on its own threads).
+    static TRACK: Cell<bool> = const { Cell::new(false) };
+}
+
+fn count() {
+    if TRACK.with(|t| t.get()) {
+        ALLOCS.fetch_add(1, Ordering::Relaxed);
+    }
+}
+
 // SAFETY: forwards every call unchanged to the system allocator; only counts.
 unsafe impl GlobalAlloc for Counting {
     unsafe fn alloc(&self, layout: Layout) -> *mut u8 {
-        ALLOCS.fetch_add(1, Ordering::Relaxed);
+        count();
         // SAFETY: same contract as the caller's.
         unsafe { System.alloc(layout) }
     }
@@ -29,7 +42,7 @@ unsafe impl GlobalAlloc for Counting {
         unsafe { System.dealloc(ptr, layout) }
     }
     unsafe fn realloc(&self, ptr: *mut u8, layout: Layout, new_size: usize) -> *mut u8 {
-        ALLOCS.fetch_add(1, Ordering::Relaxed);
+        count();
         // SAFETY: same contract as the caller's.
         unsafe { System.realloc(ptr, layout, new_size) }
     }
@@ -61,6 +74,11 @@ fn lbv_and_neck_goal_do_not_allocate_after_warm_up() {
     assert!(warm.is_some_and(|c| c.score > 0.0), "{warm:?}");
     planner.neck_goal(&map, &state, 0);
 
+    // The counter works: a Vec allocates.
+    TRACK.with(|t| t.set(true));
+    let probe = ALLOCS.load(Ordering::SeqCst);
+    drop(black_box(Vec::<u8>::with_capacity(16)));
+    assert!(ALLOCS.load(Ordering::SeqCst) > probe);
     let before = ALLOCS.load(Ordering::SeqCst);
     let mut score = 0.0;
     for k in 0..200 {
@@ -73,6 +91,7 @@ fn lbv_and_neck_goal_do_not_allocate_after_warm_up() {
         assert!(planner.lbv_decision(&mut decision));
     }
     let after = ALLOCS.load(Ordering::SeqCst);
+    TRACK.with(|t| t.set(false));
     assert_eq!(after - before, 0, "allocations on the LBV path");
     assert!(score > 0.0);
 }
