@@ -1,16 +1,92 @@
-//! Placeholder for the planner node.
+//! View planning: VP-SOM (paper sections 3–5, Algorithms 1 and 2) and the coverage and frontier
+//! baselines, behind one interface ([`ViewPlanner`]).
+//!
+//! The planner sees no ground truth: only the [`ObjectMap`](shm_types::ObjectMap), the estimated
+//! [`RobotState`](shm_types::RobotState), the navigation grid (obstacles only; reachability and
+//! collision) and the exploration grid built from depth (UNKNOWN cells; frontiers).
+//!
+//! # Files
+//! | file | content |
+//! |---|---|
+//! | [`terms`] | each term of F(v): H_IoU, cos θ_sopm, co-visibility, N_cp, cos θ_c, f_a, f_c |
+//! | [`evaluate`] | F(v) of one camera pose over a map snapshot, as a traced `Candidate` |
+//! | [`clusters`] | clusters by first sighting, completion rule, sides-seen tracker |
+//! | [`gbv`] | global candidates on a ring, [`GbvJob`] (owned, parallel) |
+//! | [`lbv`] | [`Lbv`]: neck candidates, allocation-free |
+//! | [`reach`] | inflated navigation grid, reachability (Dijkstra) and collision |
+//! | [`frontier`], [`coverage`] | baseline algorithms as jobs |
+//! | [`vpsom`], [`baselines`] | the three planners (state machines) |
+//! | [`session`] | the interface: inputs, [`Step`], jobs, status, [`Summary`] |
+//! | [`synth`] | synthetic maps (scene-3-like) for benchmarks and tests |
+//!
+//! # Hosting (how the lead's host drives a planner)
+//! ```text
+//! let mut planner = make_planner(&cfg.planner, &cfg.camera);
+//! // Real-time LBV thread, every 1 / planner.lbv_hz s, on the newest map and state (in place):
+//! let neck = planner.neck_goal(&map, &state, now_ns);          // never waits, never allocates
+//! publish(neck);
+//! // On every new RobotState (same thread; cheap while a goal is in progress):
+//! match planner.next_goal(&PlannerInputs { map, state, nav, explore }, now_ns) {
+//!     Step::Wait => {}
+//!     Step::Goal(g) => publish(g),                              // goal ids increase
+//!     Step::Compute(job) => pool.spawn(move || tx.send(job.run())),  // low-priority rayon pool
+//!     Step::Finished(summary) => stop(summary),
+//! }
+//! // When the pool's result arrives (poll the bounded channel with try_recv, never block):
+//! if let Ok(out) = rx.try_recv() { /* same match */ planner.job_done(out, now_ns); }
+//! // Tracing: planner.take_decision() (GBV, boxed), planner.lbv_decision(&mut loaned) (LBV).
+//! ```
+//! `next_goal` issues a new round when `RobotState.nav_status` is REACHED or UNREACHABLE for the
+//! current goal id, or when no goal was issued yet; while a job is pending it returns `Wait`.
+//! A lockstep host simply calls `job.run()` inline. Jobs own their snapshots (recycled
+//! buffers handed back through `job_done`), so the map may change while they run.
+//!
+//! # Bootstrap
+//! Before any cluster is known, VP-SOM (and coverage) look around in place (neck sweep through
+//! `bootstrap.look_around_steps` stops), then drive to frontiers of the exploration grid until a
+//! background object appears, at which point the GBV takes over (superseding the frontier goal).
+//!
+//! # Termination (section 3.4, Algorithm 2)
+//! A foreground object is done when `complete` is set or `h_sopm < eps_sopm`; a cluster when all
+//! its foreground objects are; a cluster with no foreground object yet when its centre has been
+//! in view from `bootstrap.empty_cluster_sectors` sectors. VP-SOM ends `Terminated` when every
+//! cluster is done, `NoCandidates` when no unfinished cluster has a reachable candidate (or
+//! nothing was found at all). [`Summary`] reports the counts.
 
-use runtime::config::{Checker, ConfigError};
-use serde::Deserialize;
+pub mod baselines;
+pub mod clusters;
+pub mod config;
+pub mod coverage;
+pub mod evaluate;
+pub mod frontier;
+pub mod gbv;
+pub mod lbv;
+pub mod reach;
+pub mod session;
+pub mod synth;
+pub mod terms;
+pub mod vpsom;
 
-/// `[planner]` section.
-#[derive(Debug, Clone, Default, Deserialize)]
-#[serde(deny_unknown_fields, default)]
-pub struct PlannerConfig {}
+pub use baselines::{CoveragePlanner, FrontierPlanner};
+pub use config::{
+    AblationConfig, BootstrapConfig, CoverageConfig, FrontierConfig, GbvConfig, LbvConfig,
+    Occluders, PlannerConfig, PlannerKind, UnknownPlanner,
+};
+pub use evaluate::{EvalParams, Target, Weights, evaluate_view};
+pub use gbv::{GbvJob, GbvResult};
+pub use lbv::Lbv;
+pub use session::{
+    JobOutput, PlannerInputs, PlannerJob, PlannerStatus, Step, Summary, ViewPlanner,
+};
+pub use vpsom::VpsomPlanner;
 
-impl PlannerConfig {
-    /// Range-check.
-    pub fn validate(&self, _c: &Checker) -> Result<(), ConfigError> {
-        Ok(())
+use crate::config::CameraConfig;
+
+/// The planner selected by `cfg.kind`.
+pub fn make_planner(cfg: &PlannerConfig, camera: &CameraConfig) -> Box<dyn ViewPlanner> {
+    match cfg.kind {
+        PlannerKind::Vpsom => Box::new(VpsomPlanner::new(cfg, camera)),
+        PlannerKind::Coverage => Box::new(CoveragePlanner::new(cfg, camera)),
+        PlannerKind::Frontier => Box::new(FrontierPlanner::new(cfg, camera)),
     }
 }

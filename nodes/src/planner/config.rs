@@ -1,0 +1,401 @@
+//! `[planner]` configuration: one struct per nested table, defaults equal to `config/default.toml`.
+
+use runtime::config::{Checker, ConfigError};
+use serde::Deserialize;
+use std::fmt;
+use std::str::FromStr;
+
+/// Which view planner drives the robot (`--planner vpsom|coverage|frontier`).
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Default, Deserialize)]
+#[serde(rename_all = "lowercase")]
+pub enum PlannerKind {
+    /// VP-SOM (paper sections 3–5): GBV on the chassis, LBV on the neck.
+    #[default]
+    Vpsom,
+    /// All-views coverage: a full circle around every cluster, camera on the cluster centre.
+    Coverage,
+    /// Frontier exploration (Yamauchi 1997), neck fixed forward.
+    Frontier,
+}
+
+impl PlannerKind {
+    /// The name used on the command line and in `metrics.json`.
+    pub fn name(self) -> &'static str {
+        match self {
+            PlannerKind::Vpsom => "vpsom",
+            PlannerKind::Coverage => "coverage",
+            PlannerKind::Frontier => "frontier",
+        }
+    }
+}
+
+impl fmt::Display for PlannerKind {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        f.write_str(self.name())
+    }
+}
+
+/// An unknown planner name.
+#[derive(Debug, Clone, PartialEq, Eq, thiserror::Error)]
+#[error("unknown planner `{0}` (expected vpsom, coverage or frontier)")]
+pub struct UnknownPlanner(pub String);
+
+impl FromStr for PlannerKind {
+    type Err = UnknownPlanner;
+    fn from_str(s: &str) -> Result<Self, Self::Err> {
+        match s {
+            "vpsom" => Ok(PlannerKind::Vpsom),
+            "coverage" => Ok(PlannerKind::Coverage),
+            "frontier" => Ok(PlannerKind::Frontier),
+            other => Err(UnknownPlanner(other.to_string())),
+        }
+    }
+}
+
+/// Which foreground objects count as occluders of `fo_i` in H_IoU (eq. 21).
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Default, Deserialize)]
+#[serde(rename_all = "lowercase")]
+pub enum Occluders {
+    /// Every other foreground object whose box projects into the image (the paper's `Σ_{j≠i}`):
+    /// two overlapping boxes penalise both objects.
+    #[default]
+    All,
+    /// Only objects whose centre is closer to the camera (along the optical axis) than `fo_i`'s
+    /// centre: physically, only those can hide it.
+    Closer,
+}
+
+/// Term switches for ablation studies. A disabled multiplicative factor (cos θ_sopm, C_asso,
+/// N_cp, cos θ_c) is replaced by 1; a disabled additive term (H_sopm, H_IoU) by 0.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Deserialize)]
+#[serde(deny_unknown_fields, default)]
+pub struct AblationConfig {
+    /// Model uncertainty H_sopm in f_a (additive).
+    pub h_sopm: bool,
+    /// Non-occlusion H_IoU in f_a (additive).
+    pub h_iou: bool,
+    /// cos θ_sopm in f_a (multiplicative).
+    pub theta_sopm: bool,
+    /// C_asso in f_a (multiplicative).
+    pub c_asso: bool,
+    /// N_cp in f_c (multiplicative).
+    pub n_cp: bool,
+    /// cos θ_c in f_c (multiplicative).
+    pub theta_c: bool,
+}
+
+impl Default for AblationConfig {
+    fn default() -> Self {
+        Self {
+            h_sopm: true,
+            h_iou: true,
+            theta_sopm: true,
+            c_asso: true,
+            n_cp: true,
+            theta_c: true,
+        }
+    }
+}
+
+/// `[planner.gbv]`: global best view.
+#[derive(Debug, Clone, Copy, PartialEq, Deserialize)]
+#[serde(deny_unknown_fields, default)]
+pub struct GbvConfig {
+    /// Candidates N sampled on a ring around the cluster.
+    pub candidates: usize,
+    /// Weight α of f_a.
+    pub alpha: f32,
+    /// Weight β of f_c.
+    pub beta: f32,
+    /// Clearance between the cluster's footprint (bounding circle) and the ring, metres.
+    pub safe_distance: f32,
+    /// GBV rounds spent on one cluster before it is given up (guarantees termination).
+    pub max_rounds_per_cluster: u32,
+}
+
+impl Default for GbvConfig {
+    fn default() -> Self {
+        Self {
+            candidates: 36,
+            alpha: 1.0,
+            beta: 0.2,
+            safe_distance: 0.6,
+            max_rounds_per_cluster: 12,
+        }
+    }
+}
+
+/// `[planner.lbv]`: local best view (neck).
+#[derive(Debug, Clone, Copy, PartialEq, Deserialize)]
+#[serde(deny_unknown_fields, default)]
+pub struct LbvConfig {
+    /// Candidates M spread evenly over the neck range.
+    pub candidates: usize,
+    /// Weight α of f_a (0 in the paper: LBV depends on continuity only).
+    pub alpha: f32,
+    /// Weight β of f_c.
+    pub beta: f32,
+    /// Lower end of the neck yaw range relative to the base, degrees.
+    pub neck_min_deg: f32,
+    /// Upper end of the neck yaw range, degrees (a 360° range does not repeat its end point).
+    pub neck_max_deg: f32,
+}
+
+impl Default for LbvConfig {
+    fn default() -> Self {
+        Self {
+            candidates: 18,
+            alpha: 0.0,
+            beta: 1.0,
+            neck_min_deg: -180.0,
+            neck_max_deg: 180.0,
+        }
+    }
+}
+
+/// `[planner.bootstrap]`: behaviour before a cluster is known, and for clusters without
+/// foreground objects.
+#[derive(Debug, Clone, Copy, PartialEq, Deserialize)]
+#[serde(deny_unknown_fields, default)]
+pub struct BootstrapConfig {
+    /// Neck stops of the in-place look-around sweep (evenly over 360°).
+    pub look_around_steps: usize,
+    /// A neck stop counts as reached within this yaw error, degrees.
+    pub neck_tolerance_deg: f32,
+    /// Angular sectors around a cluster (for the "looked at from enough sides" rule).
+    pub sectors: usize,
+    /// A cluster with no foreground object yet is done once its centre was in view from this
+    /// many distinct sectors.
+    pub empty_cluster_sectors: usize,
+}
+
+impl Default for BootstrapConfig {
+    fn default() -> Self {
+        Self {
+            look_around_steps: 6,
+            neck_tolerance_deg: 5.0,
+            sectors: 8,
+            empty_cluster_sectors: 4,
+        }
+    }
+}
+
+/// `[planner.coverage]`: all-views coverage baseline.
+#[derive(Debug, Clone, Copy, PartialEq, Deserialize)]
+#[serde(deny_unknown_fields, default)]
+pub struct CoverageConfig {
+    /// Waypoints on the full circle around each cluster.
+    pub waypoints: usize,
+}
+
+impl Default for CoverageConfig {
+    fn default() -> Self {
+        Self { waypoints: 12 }
+    }
+}
+
+/// `[planner.frontier]`: frontier-exploration baseline (also VP-SOM's bootstrap exploration).
+#[derive(Debug, Clone, Copy, PartialEq, Deserialize)]
+#[serde(deny_unknown_fields, default)]
+pub struct FrontierConfig {
+    /// Frontier clusters with fewer cells are ignored (noise).
+    pub min_cells: usize,
+    /// Frontier cells within this distance of an earlier frontier goal are ignored, metres
+    /// (a frontier that survives a visit cannot be cleared from there).
+    pub blacklist_radius: f32,
+}
+
+impl Default for FrontierConfig {
+    fn default() -> Self {
+        Self {
+            min_cells: 5,
+            blacklist_radius: 0.5,
+        }
+    }
+}
+
+/// `[planner]` section.
+#[derive(Debug, Clone, PartialEq, Deserialize)]
+#[serde(deny_unknown_fields, default)]
+pub struct PlannerConfig {
+    /// `vpsom`, `coverage` or `frontier`.
+    pub kind: PlannerKind,
+    /// LBV rate of the planner's real-time thread, Hz.
+    pub lbv_hz: f64,
+    /// Execution budget of one LBV cycle, ms.
+    pub lbv_budget_ms: f64,
+    /// A foreground object is complete when H_sopm < ε_sopm (section 3.4).
+    pub eps_sopm: f32,
+    /// ε_cp of eq. (22): co-visible points at which N_cp saturates at 1.
+    pub eps_cp: f32,
+    /// θ_thresh of section 5.1: largest co-visibility angle, degrees.
+    pub theta_thresh_deg: f32,
+    /// Occluders in H_IoU.
+    pub occluders: Occluders,
+    /// Robot footprint radius for collision and reachability, metres.
+    pub robot_radius: f32,
+    /// Whether UNKNOWN cells of the navigation grid may be driven through.
+    pub nav_unknown_traversable: bool,
+    /// Global best view.
+    pub gbv: GbvConfig,
+    /// Local best view.
+    pub lbv: LbvConfig,
+    /// Bootstrap and empty clusters.
+    pub bootstrap: BootstrapConfig,
+    /// Coverage baseline.
+    pub coverage: CoverageConfig,
+    /// Frontier baseline.
+    pub frontier: FrontierConfig,
+    /// Term switches.
+    pub ablation: AblationConfig,
+}
+
+impl Default for PlannerConfig {
+    fn default() -> Self {
+        Self {
+            kind: PlannerKind::Vpsom,
+            lbv_hz: 20.0,
+            lbv_budget_ms: 5.0,
+            eps_sopm: 0.42,
+            eps_cp: 100.0,
+            theta_thresh_deg: 40.0,
+            occluders: Occluders::All,
+            robot_radius: 0.3,
+            nav_unknown_traversable: true,
+            gbv: GbvConfig::default(),
+            lbv: LbvConfig::default(),
+            bootstrap: BootstrapConfig::default(),
+            coverage: CoverageConfig::default(),
+            frontier: FrontierConfig::default(),
+            ablation: AblationConfig::default(),
+        }
+    }
+}
+
+impl PlannerConfig {
+    /// Range-check.
+    pub fn validate(&self, c: &Checker) -> Result<(), ConfigError> {
+        c.in_range("planner.lbv_hz", self.lbv_hz, 0.1, 1000.0)?;
+        c.positive("planner.lbv_budget_ms", self.lbv_budget_ms)?;
+        c.require(
+            self.lbv_budget_ms <= 1000.0 / self.lbv_hz,
+            "planner.lbv_budget_ms",
+            self.lbv_budget_ms,
+            "must not exceed the LBV period 1000 / planner.lbv_hz",
+        )?;
+        c.in_range("planner.eps_sopm", self.eps_sopm.into(), 0.0, 1.0)?;
+        c.in_range("planner.eps_cp", self.eps_cp.into(), 1.0, 1e6)?;
+        c.in_range(
+            "planner.theta_thresh_deg",
+            self.theta_thresh_deg.into(),
+            0.1,
+            180.0,
+        )?;
+        c.in_range("planner.robot_radius", self.robot_radius.into(), 0.0, 2.0)?;
+        let g = &self.gbv;
+        c.count("planner.gbv.candidates", g.candidates, 1, 100_000)?;
+        c.in_range("planner.gbv.alpha", g.alpha.into(), 0.0, 100.0)?;
+        c.in_range("planner.gbv.beta", g.beta.into(), 0.0, 100.0)?;
+        c.in_range(
+            "planner.gbv.safe_distance",
+            g.safe_distance.into(),
+            0.0,
+            10.0,
+        )?;
+        c.count(
+            "planner.gbv.max_rounds_per_cluster",
+            g.max_rounds_per_cluster as usize,
+            1,
+            10_000,
+        )?;
+        let l = &self.lbv;
+        c.count("planner.lbv.candidates", l.candidates, 1, 100_000)?;
+        c.in_range("planner.lbv.alpha", l.alpha.into(), 0.0, 100.0)?;
+        c.in_range("planner.lbv.beta", l.beta.into(), 0.0, 100.0)?;
+        c.in_range(
+            "planner.lbv.neck_min_deg",
+            l.neck_min_deg.into(),
+            -180.0,
+            180.0,
+        )?;
+        c.require(
+            l.neck_max_deg >= l.neck_min_deg && l.neck_max_deg <= 180.0,
+            "planner.lbv.neck_max_deg",
+            l.neck_max_deg,
+            "must be in [planner.lbv.neck_min_deg, 180]",
+        )?;
+        let b = &self.bootstrap;
+        c.count(
+            "planner.bootstrap.look_around_steps",
+            b.look_around_steps,
+            1,
+            360,
+        )?;
+        c.in_range(
+            "planner.bootstrap.neck_tolerance_deg",
+            b.neck_tolerance_deg.into(),
+            0.1,
+            90.0,
+        )?;
+        c.count("planner.bootstrap.sectors", b.sectors, 1, 64)?;
+        c.count(
+            "planner.bootstrap.empty_cluster_sectors",
+            b.empty_cluster_sectors,
+            0,
+            b.sectors,
+        )?;
+        c.count(
+            "planner.coverage.waypoints",
+            self.coverage.waypoints,
+            3,
+            10_000,
+        )?;
+        c.count(
+            "planner.frontier.min_cells",
+            self.frontier.min_cells,
+            1,
+            100_000,
+        )?;
+        c.in_range(
+            "planner.frontier.blacklist_radius",
+            self.frontier.blacklist_radius.into(),
+            0.0,
+            10.0,
+        )
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::config::Config;
+    use std::path::Path;
+
+    #[test]
+    fn shipped_section_equals_defaults() {
+        assert_eq!(Config::builtin().planner, PlannerConfig::default());
+    }
+
+    #[test]
+    fn kinds_parse_and_bad_values_are_named() {
+        assert_eq!("frontier".parse::<PlannerKind>(), Ok(PlannerKind::Frontier));
+        assert_eq!(PlannerKind::Coverage.to_string(), "coverage");
+        assert!("greedy".parse::<PlannerKind>().is_err());
+        let f = Path::new("x.toml");
+        let e = Config::parse(f, "[planner]\nkind = \"greedy\"\n").unwrap_err();
+        assert_eq!(e.key(), "planner.kind", "{e}");
+        let e = Config::parse(f, "[planner.gbv]\ncandidates = 0\n").unwrap_err();
+        assert_eq!(e.key(), "planner.gbv.candidates");
+        let e = Config::parse(f, "[planner.ablation]\nh_iuo = false\n").unwrap_err();
+        assert!(e.to_string().contains("h_iuo"), "{e}");
+        let e = Config::parse(f, "[planner]\nlbv_hz = 100.0\nlbv_budget_ms = 20.0\n").unwrap_err();
+        assert_eq!(e.key(), "planner.lbv_budget_ms");
+        let ok = Config::parse(
+            f,
+            "[planner]\nkind = \"coverage\"\noccluders = \"closer\"\n",
+        );
+        let ok = ok.unwrap();
+        assert_eq!(ok.planner.kind, PlannerKind::Coverage);
+        assert_eq!(ok.planner.occluders, Occluders::Closer);
+    }
+}

@@ -1,0 +1,268 @@
+//! Frontier exploration (Yamauchi 1997) on the exploration grid built from depth.
+//!
+//! Frontier cells are FREE cells with an UNKNOWN 4-neighbour. They are grouped into 8-connected
+//! clusters; clusters smaller than `min_cells` are noise, and cells within `blacklist_radius` of
+//! an earlier frontier goal are ignored (a frontier that survived a visit cannot be cleared from
+//! there). For every remaining cluster the goal is its reachable cell (on the inflated navigation
+//! grid) nearest its centroid; the cluster with the shortest path wins. The goal yaw points from
+//! the robot to the goal, so a forward-fixed camera arrives looking at the frontier.
+//!
+//! Used by the frontier baseline and by VP-SOM/coverage to explore before any cluster is known.
+
+use crate::planner::reach::NavMap;
+use shm_types::{OccupancyGrid, grid_cell};
+
+/// Parameters of frontier selection.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct FrontierParams {
+    /// Minimum cells of a frontier cluster.
+    pub min_cells: usize,
+    /// Blacklist radius around earlier goals, metres.
+    pub blacklist_radius: f32,
+    /// Robot radius, metres.
+    pub robot_radius: f32,
+    /// Whether UNKNOWN navigation cells are traversable.
+    pub nav_unknown_traversable: bool,
+}
+
+/// A frontier cluster.
+#[derive(Debug, Clone, PartialEq)]
+pub struct Frontier {
+    /// Cell indices (exploration grid).
+    pub cells: Vec<usize>,
+    /// Centroid, world xy.
+    pub centroid: [f32; 2],
+}
+
+fn is_free(v: u8) -> bool {
+    v != grid_cell::UNKNOWN && v < 50
+}
+
+fn cell_center(g: &OccupancyGrid, i: usize) -> [f32; 2] {
+    let w = g.width as usize;
+    [
+        g.origin[0] + ((i % w) as f32 + 0.5) * g.resolution,
+        g.origin[1] + ((i / w) as f32 + 0.5) * g.resolution,
+    ]
+}
+
+/// Frontier clusters of the exploration grid, without blacklisted cells, largest first.
+pub fn frontiers(g: &OccupancyGrid, blacklist: &[[f32; 2]], p: &FrontierParams) -> Vec<Frontier> {
+    let (w, h) = (g.width as usize, g.height as usize);
+    let cells = g.used();
+    if cells.len() != w * h || w == 0 || h == 0 {
+        return Vec::new();
+    }
+    let r2 = p.blacklist_radius * p.blacklist_radius;
+    let mut front = vec![false; w * h];
+    for y in 0..h {
+        for x in 0..w {
+            let i = y * w + x;
+            if !is_free(cells[i]) {
+                continue;
+            }
+            let unknown = |xx: usize, yy: usize| cells[yy * w + xx] == grid_cell::UNKNOWN;
+            let near_unknown = (x > 0 && unknown(x - 1, y))
+                || (x + 1 < w && unknown(x + 1, y))
+                || (y > 0 && unknown(x, y - 1))
+                || (y + 1 < h && unknown(x, y + 1));
+            if near_unknown {
+                let c = cell_center(g, i);
+                let banned = blacklist
+                    .iter()
+                    .any(|b| (b[0] - c[0]).powi(2) + (b[1] - c[1]).powi(2) <= r2);
+                front[i] = !banned;
+            }
+        }
+    }
+    let mut seen = vec![false; w * h];
+    let mut out = Vec::new();
+    let mut stack = Vec::new();
+    for s in 0..w * h {
+        if !front[s] || seen[s] {
+            continue;
+        }
+        seen[s] = true;
+        stack.push(s);
+        let mut members = Vec::new();
+        while let Some(i) = stack.pop() {
+            members.push(i);
+            let (x, y) = ((i % w) as isize, (i / w) as isize);
+            for dy in -1..=1isize {
+                for dx in -1..=1isize {
+                    let (nx, ny) = (x + dx, y + dy);
+                    if nx < 0 || ny < 0 || nx >= w as isize || ny >= h as isize {
+                        continue;
+                    }
+                    let j = ny as usize * w + nx as usize;
+                    if front[j] && !seen[j] {
+                        seen[j] = true;
+                        stack.push(j);
+                    }
+                }
+            }
+        }
+        if members.len() >= p.min_cells {
+            let mut c = [0.0f32; 2];
+            for i in &members {
+                let m = cell_center(g, *i);
+                c[0] += m[0];
+                c[1] += m[1];
+            }
+            let n = members.len() as f32;
+            out.push(Frontier {
+                cells: members,
+                centroid: [c[0] / n, c[1] / n],
+            });
+        }
+    }
+    out.sort_by_key(|f| std::cmp::Reverse(f.cells.len()));
+    out
+}
+
+/// Choose the nearest reachable frontier: goal `[x, y, yaw]` and path length.
+pub fn choose(
+    g: &OccupancyGrid,
+    fronts: &[Frontier],
+    nav: &NavMap,
+    base: [f32; 3],
+) -> Option<([f32; 3], f32)> {
+    let mut best: Option<([f32; 2], f32)> = None;
+    for f in fronts {
+        let mut pick: Option<([f32; 2], f32)> = None;
+        for &i in &f.cells {
+            let c = cell_center(g, i);
+            if !nav.reachable(c) {
+                continue;
+            }
+            let d2 = (c[0] - f.centroid[0]).powi(2) + (c[1] - f.centroid[1]).powi(2);
+            if pick.is_none_or(|(_, bd)| d2 < bd) {
+                pick = Some((c, d2));
+            }
+        }
+        if let Some((c, _)) = pick {
+            let len = nav.path_length(c).unwrap_or(f32::INFINITY);
+            if best.is_none_or(|(_, bl)| len < bl) {
+                best = Some((c, len));
+            }
+        }
+    }
+    best.map(|(c, len)| {
+        let (dx, dy) = (c[0] - base[0], c[1] - base[1]);
+        let yaw = if dx * dx + dy * dy > 1e-6 {
+            dy.atan2(dx)
+        } else {
+            base[2]
+        };
+        ([c[0], c[1], yaw], len)
+    })
+}
+
+/// One frontier selection as an owned job.
+#[derive(Debug)]
+pub struct FrontierJob {
+    /// Exploration grid snapshot (with UNKNOWN cells).
+    pub explore: Box<OccupancyGrid>,
+    /// Navigation grid snapshot.
+    pub nav: Box<OccupancyGrid>,
+    /// Robot base pose.
+    pub base: [f32; 3],
+    /// Earlier frontier goals.
+    pub blacklist: Vec<[f32; 2]>,
+    /// Parameters.
+    pub params: FrontierParams,
+}
+
+/// Outcome of a [`FrontierJob`].
+#[derive(Debug)]
+pub struct FrontierResult {
+    /// Goal pose and path length, `None` if no reachable frontier remains.
+    pub goal: Option<([f32; 3], f32)>,
+    /// Frontier clusters found (reachable or not).
+    pub frontiers: usize,
+    /// Buffers handed back for reuse.
+    pub explore: Box<OccupancyGrid>,
+    /// Buffers handed back for reuse.
+    pub nav: Box<OccupancyGrid>,
+}
+
+impl FrontierJob {
+    /// Run the selection.
+    pub fn run(self) -> FrontierResult {
+        let p = self.params;
+        let fronts = frontiers(&self.explore, &self.blacklist, &p);
+        let mut nav = NavMap::new(&self.nav, p.robot_radius, p.nav_unknown_traversable);
+        nav.flood_from([self.base[0], self.base[1]], p.robot_radius);
+        let goal = choose(&self.explore, &fronts, &nav, self.base);
+        FrontierResult {
+            goal,
+            frontiers: fronts.len(),
+            explore: self.explore,
+            nav: self.nav,
+        }
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use shm_types::boxed_zeroed;
+
+    fn params() -> FrontierParams {
+        FrontierParams {
+            min_cells: 3,
+            blacklist_radius: 0.5,
+            robot_radius: 0.2,
+            nav_unknown_traversable: true,
+        }
+    }
+
+    /// 3 m × 2 m at 0.1 m: the left third is known free, the rest unknown; a small unknown hole
+    /// of one cell (frontier of 4 cells, noise-sized at min 5) sits in the free part.
+    fn grid() -> Box<OccupancyGrid> {
+        let mut g = boxed_zeroed::<OccupancyGrid>();
+        g.resolution = 0.1;
+        g.width = 30;
+        g.height = 20;
+        for y in 0..20 {
+            for x in 0..30 {
+                g.cells[y * 30 + x] = if x < 10 {
+                    grid_cell::FREE
+                } else {
+                    grid_cell::UNKNOWN
+                };
+            }
+        }
+        g.cells[10 * 30 + 4] = grid_cell::UNKNOWN;
+        g
+    }
+
+    #[test]
+    fn frontier_cells_cluster_and_nearest_reachable_wins() {
+        let g = grid();
+        let mut p = params();
+        let f = frontiers(&g, &[], &p);
+        assert_eq!(f.len(), 2);
+        assert_eq!(f[0].cells.len(), 20, "column x = 9");
+        assert!((f[0].centroid[0] - 0.95).abs() < 1e-5 && (f[0].centroid[1] - 1.0).abs() < 1e-5);
+        p.min_cells = 5;
+        let f = frontiers(&g, &[], &p);
+        assert_eq!(f.len(), 1, "the hole's 4 cells are noise");
+        let nav = boxed_zeroed::<OccupancyGrid>();
+        let mut m = NavMap::new(&nav, 0.2, true);
+        m.flood_from([0.2, 1.0], 0.2);
+        let (goal, len) = choose(&g, &f, &m, [0.2, 1.0, 2.0]).unwrap();
+        assert!(
+            (goal[0] - 0.95).abs() < 1e-5 && (goal[1] - 1.0).abs() < 0.06,
+            "{goal:?}"
+        );
+        assert!(goal[2].abs() < 0.1 && (len - 0.75).abs() < 0.06);
+        // Blacklisting around the goal splits the column; a wide radius removes everything.
+        assert_eq!(frontiers(&g, &[[0.95, 1.0]], &p).len(), 2);
+        let p5 = FrontierParams {
+            blacklist_radius: 1.5,
+            ..p
+        };
+        assert!(frontiers(&g, &[[0.95, 1.0]], &p5).is_empty());
+    }
+}

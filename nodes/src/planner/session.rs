@@ -1,0 +1,437 @@
+//! The planner interface shared by VP-SOM and the baselines: inputs, steps, jobs, status and
+//! summary, plus the bookkeeping every planner needs (goal ids, reusable snapshot buffers, the
+//! bootstrap look-around).
+
+use crate::planner::clusters::{self, SideTracker};
+use crate::planner::config::PlannerKind;
+use crate::planner::coverage::{CoverageJob, CoverageResult};
+use crate::planner::frontier::{FrontierJob, FrontierResult};
+use crate::planner::gbv::{GbvJob, GbvResult};
+use shm_types::{
+    NavGoal, NeckGoal, ObjectMap, OccupancyGrid, PlannerDecision, RobotState, boxed_zeroed,
+    nav_status, planner_state,
+};
+use std::fmt;
+
+/// What a planner reads: the newest map, estimated robot state and grids (by reference).
+#[derive(Debug, Clone, Copy)]
+pub struct PlannerInputs<'a> {
+    /// Newest object map.
+    pub map: &'a ObjectMap,
+    /// Newest estimated robot state (pose, neck, navigation status).
+    pub state: &'a RobotState,
+    /// Navigation grid (obstacles only), for reachability and collision. Empty = no obstacles.
+    pub nav: &'a OccupancyGrid,
+    /// Exploration grid built from depth (with UNKNOWN cells), for frontiers. Empty = none.
+    pub explore: &'a OccupancyGrid,
+}
+
+/// Where the session stands.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum PlannerStatus {
+    /// Exploring.
+    Running,
+    /// The planner's end condition holds (VP-SOM: every cluster done, section 3.4; coverage:
+    /// every cluster circled; frontier: no reachable frontier left).
+    Terminated,
+    /// No reachable candidate remains although the end condition does not hold (e.g. a
+    /// cluster could not be approached, or nothing was found to explore).
+    NoCandidates,
+}
+
+impl PlannerStatus {
+    /// The [`planner_state`] code.
+    pub fn code(self) -> u8 {
+        match self {
+            PlannerStatus::Running => planner_state::RUNNING,
+            PlannerStatus::Terminated => planner_state::TERMINATED,
+            PlannerStatus::NoCandidates => planner_state::NO_CANDIDATES,
+        }
+    }
+
+    /// Whether the session is over.
+    pub fn is_finished(self) -> bool {
+        self != PlannerStatus::Running
+    }
+}
+
+/// End-of-session (or running) summary.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct Summary {
+    /// Planner.
+    pub kind: PlannerKind,
+    /// Status.
+    pub status: PlannerStatus,
+    /// Chassis goals issued.
+    pub goals_issued: u64,
+    /// Goals the base reported unreachable.
+    pub goals_unreachable: u64,
+    /// Planning rounds (jobs run: GBV, frontier or coverage planning).
+    pub rounds: u64,
+    /// Clusters in the last map seen.
+    pub clusters: u32,
+    /// Of which done (VP-SOM rule) or circled (coverage).
+    pub clusters_done: u32,
+    /// Clusters given up (unreachable or out of GBV rounds).
+    pub clusters_given_up: u32,
+    /// Foreground objects in the last map seen.
+    pub foreground: u32,
+    /// Of which complete.
+    pub foreground_done: u32,
+    /// Time the session ended, ns.
+    pub finished_ns: Option<u64>,
+}
+
+impl fmt::Display for Summary {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        write!(
+            f,
+            "{}: {:?}; goals {} ({} unreachable), rounds {}; clusters {}/{} done, {} given up; \
+             foreground {}/{} complete",
+            self.kind,
+            self.status,
+            self.goals_issued,
+            self.goals_unreachable,
+            self.rounds,
+            self.clusters_done,
+            self.clusters,
+            self.clusters_given_up,
+            self.foreground_done,
+            self.foreground
+        )
+    }
+}
+
+/// A planning computation to run off the real-time thread (e.g. on the low-priority pool):
+/// owned, `Send + 'static`.
+#[derive(Debug)]
+pub enum PlannerJob {
+    /// A VP-SOM GBV round.
+    Gbv(GbvJob),
+    /// A frontier selection.
+    Frontier(FrontierJob),
+    /// A coverage circle.
+    Coverage(CoverageJob),
+}
+
+impl PlannerJob {
+    /// Run it (rayon-parallel inside where useful).
+    pub fn run(self) -> JobOutput {
+        match self {
+            PlannerJob::Gbv(j) => JobOutput::Gbv(j.run()),
+            PlannerJob::Frontier(j) => JobOutput::Frontier(j.run()),
+            PlannerJob::Coverage(j) => JobOutput::Coverage(j.run()),
+        }
+    }
+}
+
+/// Result of a [`PlannerJob`], to hand back with [`ViewPlanner::job_done`].
+#[derive(Debug)]
+pub enum JobOutput {
+    /// GBV round result.
+    Gbv(GbvResult),
+    /// Frontier result.
+    Frontier(FrontierResult),
+    /// Coverage result.
+    Coverage(CoverageResult),
+}
+
+/// What the host should do after [`ViewPlanner::next_goal`] or [`ViewPlanner::job_done`].
+#[derive(Debug)]
+pub enum Step {
+    /// Nothing: the current goal is in progress, a job is pending, or the neck is still looking
+    /// around.
+    Wait,
+    /// Publish this chassis goal (it supersedes any earlier one; ids increase).
+    Goal(NavGoal),
+    /// Run this job (e.g. on the low-priority pool) and pass its output to `job_done`.
+    Compute(PlannerJob),
+    /// The session is over.
+    Finished(Summary),
+}
+
+/// A view planner: chassis goals on demand, neck goals at the LBV rate.
+pub trait ViewPlanner: Send + fmt::Debug {
+    /// Which planner this is.
+    fn kind(&self) -> PlannerKind;
+
+    /// Call on every new robot state (and map). Cheap while a goal is in progress; when the
+    /// current goal is REACHED or UNREACHABLE (or there is none), it returns the next goal
+    /// directly or a job to compute it. May allocate (at most once per goal).
+    fn next_goal(&mut self, inputs: &PlannerInputs<'_>, now_ns: u64) -> Step;
+
+    /// Hand back a finished job's output; returns the goal to publish, or `Finished`.
+    fn job_done(&mut self, output: JobOutput, now_ns: u64) -> Step;
+
+    /// The neck goal for the newest map and state. Never waits and, after the first call,
+    /// never allocates (safe on the real-time LBV thread).
+    fn neck_goal(&mut self, map: &ObjectMap, state: &RobotState, now_ns: u64) -> NeckGoal;
+
+    /// Current status.
+    fn status(&self) -> PlannerStatus;
+
+    /// Summary so far (final once `status()` is finished).
+    fn summary(&self) -> Summary;
+
+    /// The trace of the newest chassis-goal decision (GBV candidates), once.
+    fn take_decision(&mut self) -> Option<Box<PlannerDecision>> {
+        None
+    }
+
+    /// Write the trace of the newest neck decision (LBV candidates) into `d`; false if the
+    /// planner has none. Does not allocate.
+    fn lbv_decision(&self, _d: &mut PlannerDecision) -> bool {
+        false
+    }
+}
+
+/// Outcome of the current chassis goal.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub(crate) enum Outcome {
+    /// No goal issued yet (or the last one was consumed).
+    None,
+    /// The base has not finished it.
+    Pending,
+    /// Reached.
+    Reached,
+    /// Refused or unreachable.
+    Unreachable,
+}
+
+/// Goal ids and counts.
+#[derive(Debug, Clone, Default)]
+pub(crate) struct Goals {
+    next_id: u64,
+    pub(crate) current: Option<NavGoal>,
+    pub(crate) issued: u64,
+    pub(crate) unreachable: u64,
+}
+
+impl Goals {
+    pub(crate) fn new() -> Self {
+        Self {
+            next_id: 1,
+            ..Default::default()
+        }
+    }
+
+    /// The current goal's outcome per the robot state; a finished goal is consumed (so the
+    /// outcome is reported once) and counted.
+    pub(crate) fn poll(&mut self, state: &RobotState) -> Outcome {
+        let Some(g) = self.current else {
+            return Outcome::None;
+        };
+        if state.nav_goal_id != g.goal_id {
+            return Outcome::Pending;
+        }
+        match state.nav_status {
+            nav_status::REACHED => {
+                self.current = None;
+                Outcome::Reached
+            }
+            nav_status::UNREACHABLE => {
+                self.current = None;
+                self.unreachable += 1;
+                Outcome::Unreachable
+            }
+            _ => Outcome::Pending,
+        }
+    }
+
+    /// Issue a new goal (ids increase by one from 1).
+    pub(crate) fn issue(
+        &mut self,
+        pose: [f32; 3],
+        score: f32,
+        cluster_id: i32,
+        kind: u8,
+        now_ns: u64,
+    ) -> NavGoal {
+        let g = NavGoal {
+            goal_id: self.next_id,
+            pose,
+            score,
+            cluster_id,
+            kind,
+            ..Default::default()
+        };
+        let mut g = g;
+        g.header.sim_time_ns = now_ns;
+        self.next_id += 1;
+        self.issued += 1;
+        self.current = Some(g);
+        g
+    }
+}
+
+/// Copy the valid part of a map into a reusable buffer.
+pub fn copy_map(dst: &mut ObjectMap, src: &ObjectMap) {
+    dst.header = src.header;
+    dst.last_frame_seq = src.last_frame_seq;
+    dst.last_frame_stamp_ns = src.last_frame_stamp_ns;
+    dst.eps_sopm = src.eps_sopm;
+    let n = src.objects().len();
+    dst.count = n as u32;
+    dst.objects[..n].copy_from_slice(&src.objects[..n]);
+}
+
+/// Copy the valid part of a grid into a reusable buffer.
+pub fn copy_grid(dst: &mut OccupancyGrid, src: &OccupancyGrid) {
+    dst.header = src.header;
+    dst.origin = src.origin;
+    dst.resolution = src.resolution;
+    dst.width = src.width;
+    dst.height = src.height;
+    let n = src.used().len();
+    dst.cells[..n].copy_from_slice(&src.cells[..n]);
+}
+
+/// Snapshot buffers recycled between jobs (one allocation each per session).
+#[derive(Debug, Default)]
+pub(crate) struct Buffers {
+    map: Option<Box<ObjectMap>>,
+    nav: Option<Box<OccupancyGrid>>,
+    explore: Option<Box<OccupancyGrid>>,
+}
+
+impl Buffers {
+    pub(crate) fn map(&mut self, src: &ObjectMap) -> Box<ObjectMap> {
+        let mut b = self.map.take().unwrap_or_else(boxed_zeroed);
+        copy_map(&mut b, src);
+        b
+    }
+    pub(crate) fn nav(&mut self, src: &OccupancyGrid) -> Box<OccupancyGrid> {
+        let mut b = self.nav.take().unwrap_or_else(boxed_zeroed);
+        copy_grid(&mut b, src);
+        b
+    }
+    pub(crate) fn explore(&mut self, src: &OccupancyGrid) -> Box<OccupancyGrid> {
+        let mut b = self.explore.take().unwrap_or_else(boxed_zeroed);
+        copy_grid(&mut b, src);
+        b
+    }
+    pub(crate) fn put_map(&mut self, b: Box<ObjectMap>) {
+        self.map = Some(b);
+    }
+    pub(crate) fn put_nav(&mut self, b: Box<OccupancyGrid>) {
+        self.nav = Some(b);
+    }
+    pub(crate) fn put_explore(&mut self, b: Box<OccupancyGrid>) {
+        self.explore = Some(b);
+    }
+}
+
+/// In-place 360° look-around: neck stops evenly spaced, advanced when the neck gets within a
+/// tolerance of the current stop.
+#[derive(Debug, Clone)]
+pub(crate) struct LookAround {
+    steps: usize,
+    tol: f32,
+    k: usize,
+    sweeps: u32,
+}
+
+impl LookAround {
+    pub(crate) fn new(steps: usize, tol_rad: f32) -> Self {
+        Self {
+            steps: steps.max(1),
+            tol: tol_rad,
+            k: 0,
+            sweeps: 0,
+        }
+    }
+
+    /// The neck yaw to command given the current one (advances through the stops).
+    pub(crate) fn target(&mut self, neck_yaw: f32) -> f32 {
+        let stop = |k: usize, n: usize| {
+            crate::geom::wrap_angle(std::f32::consts::TAU * k as f32 / n as f32)
+        };
+        if crate::geom::wrap_angle(neck_yaw - stop(self.k, self.steps)).abs() <= self.tol {
+            self.k += 1;
+            if self.k == self.steps {
+                self.k = 0;
+                self.sweeps += 1;
+            }
+        }
+        stop(self.k, self.steps)
+    }
+
+    /// Whether at least one full sweep was completed.
+    pub(crate) fn swept(&self) -> bool {
+        self.sweeps > 0
+    }
+}
+
+/// Cluster and object counts of a map for the summary.
+pub(crate) fn map_counts(
+    map: &ObjectMap,
+    eps_sopm: f32,
+    sides: &SideTracker,
+    min_sides: usize,
+    s: &mut Summary,
+) {
+    let cl = clusters::clusters(map, eps_sopm, sides, min_sides);
+    s.clusters = cl.len() as u32;
+    s.clusters_done = cl.iter().filter(|c| c.done).count() as u32;
+    let fg = map.objects().iter().filter(|o| !o.is_background());
+    s.foreground = fg.clone().count() as u32;
+    s.foreground_done = fg.filter(|o| clusters::fg_done(o, eps_sopm)).count() as u32;
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn goal_ids_increase_and_outcomes_are_reported_once() {
+        let mut g = Goals::new();
+        let mut s = RobotState::default();
+        assert_eq!(g.poll(&s), Outcome::None);
+        let a = g.issue([1.0, 2.0, 0.0], 0.5, 3, 0, 10);
+        assert_eq!(a.goal_id, 1);
+        assert_eq!(g.poll(&s), Outcome::Pending, "base still on goal 0");
+        s.nav_goal_id = 1;
+        s.nav_status = nav_status::MOVING;
+        assert_eq!(g.poll(&s), Outcome::Pending);
+        s.nav_status = nav_status::UNREACHABLE;
+        assert_eq!(g.poll(&s), Outcome::Unreachable);
+        assert_eq!(g.poll(&s), Outcome::None);
+        let b = g.issue([0.0; 3], 0.0, -1, 0, 20);
+        assert!(b.goal_id > a.goal_id && g.unreachable == 1 && g.issued == 2);
+    }
+
+    #[test]
+    fn look_around_visits_every_stop() {
+        let mut l = LookAround::new(4, 0.05);
+        let mut neck = 0.0;
+        let mut stops = Vec::new();
+        for _ in 0..4 {
+            neck = l.target(neck);
+            stops.push(neck);
+        }
+        assert!(l.swept());
+        let expect = [
+            std::f32::consts::FRAC_PI_2,
+            std::f32::consts::PI,
+            -std::f32::consts::FRAC_PI_2,
+            0.0,
+        ];
+        for (a, b) in stops.iter().zip(expect) {
+            assert!(crate::geom::wrap_angle(a - b).abs() < 1e-5, "{stops:?}");
+        }
+    }
+
+    #[test]
+    fn copies_are_exact_for_the_valid_part() {
+        let mut src = boxed_zeroed::<ObjectMap>();
+        src.count = 2;
+        src.objects[1].h_sopm = 0.7;
+        src.header.seq = 9;
+        let mut dst = boxed_zeroed::<ObjectMap>();
+        dst.count = 5;
+        copy_map(&mut dst, &src);
+        assert_eq!(dst.count, 2);
+        assert_eq!(dst.objects[1].h_sopm, 0.7);
+        assert_eq!(dst.header.seq, 9);
+    }
+}
