@@ -64,7 +64,9 @@ pub struct MappedObject {
     pub observations: u32,
     /// Time of the first observation, ns.
     pub first_seen_ns: u64,
-    /// `1 − p` of the newest association attempt (0 for an object never associated yet).
+    /// `1 − p` of the newest association attempt (eq. 20). An object never associated yet has no
+    /// evidence that its points belong together, so it starts at 1 (highest observation priority:
+    /// f_a multiplies by C_asso, and 0 would make a new object invisible to the GBV).
     pub c_asso: f32,
     /// Points merged.
     pub point_count: u32,
@@ -101,7 +103,7 @@ impl MappedObject {
             sopm: sopm.map(Sopm::new),
             observations: 0,
             first_seen_ns: now_ns,
-            c_asso: 0.0,
+            c_asso: 1.0,
             point_count: 0,
         }
     }

@@ -97,6 +97,35 @@ impl Default for AblationConfig {
     }
 }
 
+impl AblationConfig {
+    /// Names of the switchable terms, as used in config keys and ablation labels
+    /// (`vpsom-no-<term>`).
+    pub const TERMS: [&'static str; 6] =
+        ["h_sopm", "h_iou", "theta_sopm", "c_asso", "n_cp", "theta_c"];
+
+    /// Switch one term off by name.
+    pub fn disable(&mut self, term: &str) -> Result<(), UnknownTerm> {
+        let flag = match term {
+            "h_sopm" => &mut self.h_sopm,
+            "h_iou" => &mut self.h_iou,
+            "theta_sopm" => &mut self.theta_sopm,
+            "c_asso" => &mut self.c_asso,
+            "n_cp" => &mut self.n_cp,
+            "theta_c" => &mut self.theta_c,
+            other => return Err(UnknownTerm(other.to_string())),
+        };
+        *flag = false;
+        Ok(())
+    }
+}
+
+/// A term name that is not one of [`AblationConfig::TERMS`].
+#[derive(Debug, Clone, PartialEq, Eq, thiserror::Error)]
+#[error(
+    "unknown F(v) term {0:?} (expected one of h_sopm, h_iou, theta_sopm, c_asso, n_cp, theta_c)"
+)]
+pub struct UnknownTerm(pub String);
+
 /// `[planner.gbv]`: global best view.
 #[derive(Debug, Clone, Copy, PartialEq, Deserialize)]
 #[serde(deny_unknown_fields, default)]

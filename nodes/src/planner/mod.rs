@@ -70,7 +70,7 @@ pub mod vpsom;
 pub use baselines::{CoveragePlanner, FrontierPlanner};
 pub use config::{
     AblationConfig, BootstrapConfig, CoverageConfig, FrontierConfig, GbvConfig, LbvConfig,
-    Occluders, PlannerConfig, PlannerKind, UnknownPlanner,
+    Occluders, PlannerConfig, PlannerKind, UnknownPlanner, UnknownTerm,
 };
 pub use evaluate::{EvalParams, Target, Weights, evaluate_view};
 pub use gbv::{GbvJob, GbvResult};
