@@ -35,6 +35,10 @@ pub struct Config {
     pub mapper: crate::mapper::MapperConfig,
     /// View planning (VP-SOM and baselines).
     pub planner: crate::planner::PlannerConfig,
+    /// `vpsom run` (deployment host) settings.
+    pub run: RunConfig,
+    /// `vpsom bench` (lockstep experiments) settings.
+    pub bench: BenchConfig,
     /// MCAP recorder.
     pub recorder: runtime::recorder::RecorderConfig,
 }
@@ -154,7 +158,103 @@ impl RatesConfig {
     }
 }
 
+/// `[run]`: the deployment host (`vpsom run`).
+#[derive(Debug, Clone, Copy, PartialEq, Deserialize)]
+#[serde(deny_unknown_fields, default)]
+pub struct RunConfig {
+    /// Simulated seconds per wall second (a real robot runs at 1).
+    pub time_scale: f64,
+    /// Camera width used by `vpsom run` (overrides `camera.width`; 0 = keep it).
+    pub camera_width: u32,
+    /// Camera height used by `vpsom run` (overrides `camera.height`; 0 = keep it).
+    pub camera_height: u32,
+    /// Give up after this much simulated time, seconds.
+    pub max_sim_s: f64,
+    /// Restarts allowed per node process after a crash.
+    pub max_restarts: u32,
+    /// Grace period for nodes to exit after SIGINT before SIGKILL, seconds.
+    pub stop_grace_s: f64,
+}
+
+impl Default for RunConfig {
+    fn default() -> Self {
+        Self {
+            time_scale: 2.0,
+            camera_width: 320,
+            camera_height: 240,
+            max_sim_s: 330.0,
+            max_restarts: 2,
+            stop_grace_s: 5.0,
+        }
+    }
+}
+
+impl RunConfig {
+    fn validate(&self, c: &Checker) -> Result<(), ConfigError> {
+        c.in_range("run.time_scale", self.time_scale, 0.01, 100.0)?;
+        c.count("run.camera_width", self.camera_width as usize, 0, shm_types::MAX_WIDTH)?;
+        c.count("run.camera_height", self.camera_height as usize, 0, shm_types::MAX_HEIGHT)?;
+        c.in_range("run.max_sim_s", self.max_sim_s, 1.0, 86_400.0)?;
+        c.count("run.max_restarts", self.max_restarts as usize, 0, 100)?;
+        c.in_range("run.stop_grace_s", self.stop_grace_s, 0.1, 600.0)
+    }
+}
+
+/// `[bench]`: the lockstep experiments (`vpsom bench`).
+#[derive(Debug, Clone, Copy, PartialEq, Deserialize)]
+#[serde(deny_unknown_fields, default)]
+pub struct BenchConfig {
+    /// Camera width in the experiments (0 = keep `camera.width`).
+    pub camera_width: u32,
+    /// Camera height in the experiments (0 = keep `camera.height`).
+    pub camera_height: u32,
+    /// Camera rate in the experiments, Hz (0 = keep `rates.camera_hz`).
+    pub camera_hz: f64,
+    /// Give up a session after this much simulated time, seconds.
+    pub max_sim_s: f64,
+    /// Seeds per scene and planner.
+    pub seeds: u64,
+    /// Sessions run at once (0 = one per CPU).
+    pub jobs: usize,
+}
+
+impl Default for BenchConfig {
+    fn default() -> Self {
+        Self {
+            camera_width: 320,
+            camera_height: 240,
+            camera_hz: 10.0,
+            max_sim_s: 600.0,
+            seeds: 5,
+            jobs: 0,
+        }
+    }
+}
+
+impl BenchConfig {
+    fn validate(&self, c: &Checker) -> Result<(), ConfigError> {
+        c.count("bench.camera_width", self.camera_width as usize, 0, shm_types::MAX_WIDTH)?;
+        c.count("bench.camera_height", self.camera_height as usize, 0, shm_types::MAX_HEIGHT)?;
+        c.in_range("bench.camera_hz", self.camera_hz, 0.0, 120.0)?;
+        c.in_range("bench.max_sim_s", self.max_sim_s, 1.0, 86_400.0)?;
+        c.count("bench.seeds", self.seeds as usize, 1, 1000)?;
+        c.count("bench.jobs", self.jobs, 0, 256)
+    }
+}
+
 impl Config {
+    /// A copy with the camera size (and rate) overridden where the override is non-zero.
+    pub fn with_camera(&self, width: u32, height: u32, camera_hz: f64) -> Config {
+        let mut c = self.clone();
+        if width > 0 && height > 0 {
+            (c.camera.width, c.camera.height) = (width, height);
+        }
+        if camera_hz > 0.0 {
+            c.rates.camera_hz = camera_hz;
+        }
+        c
+    }
+
     /// Parse and validate configuration text that came from `file`.
     pub fn parse(file: &Path, text: &str) -> Result<Self, ConfigError> {
         let cfg: Config = runtime::config::parse_toml(file, text)?;
@@ -205,6 +305,8 @@ impl Config {
         self.robot.validate(&c)?;
         self.mapper.validate(&c)?;
         self.planner.validate(&c)?;
+        self.run.validate(&c)?;
+        self.bench.validate(&c)?;
         self.recorder.validate(&c)
     }
 }

@@ -160,7 +160,7 @@ impl PortsConfig {
             .map_err(|why| c.range("ports.namespace", &self.namespace, why))?;
         self.check_settings(c, "ports", &self.settings_with(&TopicOverride::default()))?;
         for (topic, o) in &self.topics {
-            check_namespace(topic).map_err(|why| c.range("ports.topics", topic, why))?;
+            check_topic(topic).map_err(|why| c.range("ports.topics", topic, why))?;
             self.check_settings(c, &format!("ports.topics.{topic}"), &self.settings_with(o))?;
         }
         Ok(())
@@ -231,6 +231,15 @@ fn check_namespace(s: &str) -> Result<(), &'static str> {
         Err("must be 1..=48 characters of [A-Za-z0-9_-]")
     } else {
         Ok(())
+    }
+}
+
+/// A topic name: like a namespace, plus `/` between non-empty parts (e.g. `robot/state`).
+fn check_topic(s: &str) -> Result<(), &'static str> {
+    if s.len() <= 96 && s.split('/').all(|part| check_namespace(part).is_ok()) {
+        Ok(())
+    } else {
+        Err("must be 1..=96 characters of [A-Za-z0-9_-] parts joined by '/'")
     }
 }
 
