@@ -7,8 +7,8 @@
 //!   silhouette (convex hull of its projected corners / rim points, clipped to the image);
 //! - **label confusion** within configured look-alike groups (cup/bottle/vase, book/keyboard);
 //! - **score** lower for occluded objects, with noise;
-//! - **mask bleed**: each mask grows by a random 0..=`mask_bleed_px` pixels onto neighbouring
-//!   objects and the background;
+//! - **mask bleed**: each mask grows by a random 0..=`mask_bleed_px` pixels (4-neighbour
+//!   dilation) onto neighbouring objects and the background;
 //! - **box jitter** on each edge of the mask's bounding box.
 //!
 //! All randomness comes from a PCG stream per (seed, frame, object).
@@ -26,7 +26,7 @@ use shm_types::{ClassId, Detection, Detections, MAX_DETECTIONS, MAX_OBJECTS, MAX
 /// Points per silhouette (32 rim points for a cylinder, 8 corners for a box).
 const SIL_POINTS: usize = 32;
 /// Capacity of the clipped hull polygon.
-const POLY_CAP: usize = SIL_POINTS + 8;
+pub(super) const POLY_CAP: usize = SIL_POINTS + 8;
 
 #[derive(Debug, Clone, Copy, Default)]
 struct Stat {
@@ -143,9 +143,11 @@ impl Detector {
         // 1. Visible pixels and boxes per object.
         let objects = self.class_ids.len();
         self.stats[..=objects].iter_mut().for_each(Stat::reset);
-        for (i, &k) in instance[..n].iter().enumerate() {
-            if k != 0 && (k as usize) <= objects {
-                self.stats[k as usize].add((i % w) as u32, (i / w) as u32);
+        for (y, row) in instance[..n].chunks_exact(w).enumerate() {
+            for (x, &k) in row.iter().enumerate() {
+                if k != 0 && (k as usize) <= objects {
+                    self.stats[k as usize].add(x as u32, y as u32);
+                }
             }
         }
 
@@ -223,42 +225,61 @@ impl Detector {
             *l = map[k as usize];
         }
 
-        // 4. Mask bleed: `max` passes of an 8-neighbour dilation, each label up to its radius.
+        // 4. Mask bleed: `max` passes of a 4-neighbour dilation, each label up to its radius,
+        //    only inside the detections' boxes grown by the largest radius.
         let max_bleed = cands[..count].iter().map(|c| c.bleed).max().unwrap_or(0);
-        for pass in 1..=max_bleed {
-            self.scratch[..n].copy_from_slice(labels);
-            let src = &self.scratch[..n];
-            labels.par_chunks_mut(w).enumerate().for_each(|(y, row)| {
-                for (x, l) in row.iter_mut().enumerate() {
-                    let own = src[y * w + x];
-                    'scan: for dy in -1isize..=1 {
-                        for dx in -1isize..=1 {
-                            let (qx, qy) = (x as isize + dx, y as isize + dy);
-                            if qx < 0 || qy < 0 || qx >= w as isize || qy >= h as isize {
-                                continue;
-                            }
-                            let q = src[qy as usize * w + qx as usize];
-                            if q != 0 && q != own && bleed[q as usize] >= pass {
-                                *l = q;
-                                break 'scan;
+        if max_bleed > 0 {
+            let (mut x0, mut y0, mut x1, mut y1) = (w, h, 0, 0);
+            for c in &cands[..count] {
+                let b = self.stats[c.object + 1].bbox;
+                let m = max_bleed as usize;
+                x0 = x0.min((b[0] as usize).saturating_sub(m));
+                y0 = y0.min((b[1] as usize).saturating_sub(m));
+                x1 = x1.max((b[2] as usize + m).min(w));
+                y1 = y1.max((b[3] as usize + m).min(h));
+            }
+            for pass in 1..=max_bleed {
+                self.scratch[y0 * w..y1 * w].copy_from_slice(&labels[y0 * w..y1 * w]);
+                let src = &self.scratch[..n];
+                labels[y0 * w..y1 * w]
+                    .par_chunks_mut(w)
+                    .enumerate()
+                    .for_each(|(r, row)| {
+                        let y = y0 + r;
+                        let grows =
+                            |q: u8, own: u8| q != own && q != 0 && bleed[q as usize] >= pass;
+                        for (x, out) in row.iter_mut().enumerate().take(x1).skip(x0) {
+                            let i = y * w + x;
+                            let own = src[i];
+                            let neighbours = [
+                                (x > 0).then(|| src[i - 1]),
+                                (x + 1 < w).then(|| src[i + 1]),
+                                (y > 0).then(|| src[i - w]),
+                                (y + 1 < h).then(|| src[i + w]),
+                            ];
+                            if let Some(q) =
+                                neighbours.into_iter().flatten().find(|q| grows(*q, own))
+                            {
+                                *out = q;
                             }
                         }
-                    }
-                }
-            });
+                    });
+            }
         }
 
         // 5. Final masks, jittered boxes.
         self.stats[..=count].iter_mut().for_each(Stat::reset);
-        for (i, &l) in labels.iter().enumerate() {
-            if l != 0 {
-                self.stats[l as usize].add((i % w) as u32, (i / w) as u32);
+        for (y, row) in labels.chunks_exact(w).enumerate() {
+            for (x, &l) in row.iter().enumerate() {
+                if l != 0 {
+                    self.stats[l as usize].add(x as u32, y as u32);
+                }
             }
         }
         for (l, c) in cands[..count].iter().enumerate() {
             let s = self.stats[l + 1];
             let mut rng = Pcg64::new(
-                super::mix(self.seed, &[0x626f_78, frame_index, c.object as u64]) as u128,
+                super::mix(self.seed, &[0x0062_6f78, frame_index, c.object as u64]) as u128,
                 0x2360_ed05_1fc6_5da4_4385_df64_9fcc_f645,
             );
             let mut jitter = |v: u32, size: u32, max: u32| {
@@ -305,7 +326,7 @@ impl Detector {
 }
 
 /// Andrew's monotone chain; writes the hull counter-clockwise into `out`, returns its length.
-fn convex_hull(pts: &mut [Vec2], out: &mut [Vec2; POLY_CAP]) -> usize {
+pub(super) fn convex_hull(pts: &mut [Vec2], out: &mut [Vec2; POLY_CAP]) -> usize {
     pts.sort_unstable_by(|a, b| a.x.total_cmp(&b.x).then(a.y.total_cmp(&b.y)));
     let cross = |o: Vec2, a: Vec2, b: Vec2| (a - o).perp_dot(b - o);
     let mut k = 0;

@@ -111,7 +111,7 @@ impl NavGrid {
     pub fn cell(&self, p: Vec2) -> Option<(usize, usize)> {
         let c = (p - self.origin) / self.resolution;
         (c.x >= 0.0 && c.y >= 0.0 && (c.x as usize) < self.width && (c.y as usize) < self.height)
-            .then(|| (c.x as usize, c.y as usize))
+            .then_some((c.x as usize, c.y as usize))
     }
 
     /// World centre of a cell.

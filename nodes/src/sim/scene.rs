@@ -412,10 +412,10 @@ fn check_keys(file: &Path, table: &toml::Table) -> Result<(), SceneError> {
     }
     let sub = [("room", &ROOM_KEYS[..]), ("robot", &ROBOT_KEYS[..])];
     for (name, keys) in sub {
-        if let Some(toml::Value::Table(t)) = table.get(name) {
-            if let Some(k) = t.keys().find(|k| !keys.contains(&k.as_str())) {
-                return Err(unknown(name, k));
-            }
+        if let Some(toml::Value::Table(t)) = table.get(name)
+            && let Some(k) = t.keys().find(|k| !keys.contains(&k.as_str()))
+        {
+            return Err(unknown(name, k));
         }
     }
     if let Some(toml::Value::Array(objects)) = table.get("object") {
