@@ -1,40 +1,277 @@
-//! The simulated world, RGB-D camera, detector and robot (issue: sim node). Placeholder.
+//! The built-in simulator: world, depth camera, detector and robot, stepped deterministically.
+//!
+//! [`Sim`] is a pure struct: it takes goals and time steps and writes messages in place
+//! (`DepthFrame`, `Detections`, `RobotState`, `OccupancyGrid`); the hosts (`vpsom run` with real
+//! rates, lockstep with a simulated clock) own the threads, clocks and IPC.
+//!
+//! ```
+//! use nodes::{config::Config, sim::{Scene, Sim}};
+//! use shm_types::{boxed_zeroed, DepthFrame, Detections, NavGoal, RobotState};
+//! let mut cfg = Config::builtin();
+//! (cfg.camera.width, cfg.camera.height) = (160, 120);
+//! let mut sim = Sim::new(Scene::builtin("paper-scene-1").unwrap(), &cfg, 42).unwrap();
+//! let (mut frame, mut dets) = (boxed_zeroed::<DepthFrame>(), boxed_zeroed::<Detections>());
+//! sim.set_nav_goal(&NavGoal { goal_id: 1, pose: [-0.5, 0.0, 3.14], ..Default::default() })
+//!     .unwrap();
+//! for _ in 0..10 {
+//!     sim.step(33_333_333);
+//!     sim.render(&mut frame, &mut dets, sim.time_ns());
+//! }
+//! let mut state = RobotState::default();
+//! sim.robot_state(&mut state);
+//! assert_eq!(state.nav_goal_id, 1);
+//! ```
+//!
+//! Ground truth ([`Sim::scene`], [`Sim::true_state`]) is for evaluation and recording only.
 
-use runtime::config::{Checker, ConfigError};
-use serde::Deserialize;
+mod camera;
+mod config;
+mod detector;
+mod localization;
+mod nav;
+mod robot;
+mod scene;
+mod world;
 
-/// `[sim]` section.
-#[derive(Debug, Clone, Default, Deserialize)]
-#[serde(deny_unknown_fields, default)]
-pub struct SimConfig {}
+pub use camera::{DepthCamera, RenderBuffers};
+pub use config::{DetectorConfig, RobotConfig, SimConfig};
+pub use detector::Detector;
+pub use localization::Localization;
+pub use nav::{GridTooLarge, NavGrid, NavRefusal};
+pub use robot::Robot;
+pub use scene::{
+    BUILTIN_SCENES, OVERLAP_TOLERANCE, Room, SUPPORT_TOLERANCE, Scene, SceneError, SceneObject,
+    Shape,
+};
+pub use world::{Hit, STRUCTURE, World};
 
-impl SimConfig {
-    /// Range-check.
-    pub fn validate(&self, _c: &Checker) -> Result<(), ConfigError> {
-        Ok(())
+use crate::geom::{CameraMount, affine_to_pose};
+use glam::Affine3A;
+use shm_types::{DepthFrame, Detections, NavGoal, NeckGoal, OccupancyGrid, RobotState};
+
+/// Fraction of the robot radius by which obstacles are inflated for the TRUE base's collision
+/// check (the planner's grid uses the full radius; the margin absorbs small drift).
+const COLLISION_INFLATION: f32 = 0.7;
+
+/// Why a simulator could not be built.
+#[derive(Debug, thiserror::Error)]
+pub enum SimError {
+    /// The navigation grid of the scene's room does not fit an [`OccupancyGrid`].
+    #[error("scene {scene:?}: {source}")]
+    Grid {
+        /// The scene name.
+        scene: String,
+        /// Grid size details.
+        source: GridTooLarge,
+    },
+}
+
+/// The whole simulated robot and world, stepped deterministically for a seed.
+#[derive(Debug)]
+pub struct Sim {
+    scene: Scene,
+    world: World,
+    camera: DepthCamera,
+    mount: CameraMount,
+    detector: Detector,
+    robot: Robot,
+    grid: NavGrid,
+    collision: NavGrid,
+    loc: Localization,
+    buf: RenderBuffers,
+    time_ns: u64,
+    frames: u64,
+}
+
+impl Sim {
+    /// A simulator of `scene` with the `[camera]`, `[sim]`, `[detector]` and `[robot]` sections
+    /// of `cfg`. Same scene, config and seed → identical frames, detections and states for the
+    /// same sequence of calls (whatever the number of rayon threads).
+    pub fn new(scene: Scene, cfg: &crate::config::Config, seed: u64) -> Result<Sim, SimError> {
+        let grid_err = |source| SimError::Grid {
+            scene: scene.name.clone(),
+            source,
+        };
+        let r = &cfg.robot;
+        let grid = NavGrid::build(&scene, r.radius, r.grid_resolution).map_err(grid_err)?;
+        let collision = NavGrid::build(&scene, r.radius * COLLISION_INFLATION, r.grid_resolution)
+            .map_err(grid_err)?;
+        Ok(Sim {
+            world: World::new(&scene),
+            camera: DepthCamera::new(&cfg.camera, &cfg.sim, mix(seed, &[1])),
+            mount: cfg.camera.mount,
+            detector: Detector::new(&scene, &cfg.detector, mix(seed, &[2])),
+            robot: Robot::new(
+                r,
+                scene.robot_start,
+                cfg.camera.mount.pitch(),
+                mix(seed, &[3]),
+            ),
+            loc: Localization::new(&scene, &cfg.sim),
+            grid,
+            collision,
+            buf: RenderBuffers::new(),
+            time_ns: 0,
+            frames: 0,
+            scene,
+        })
+    }
+
+    /// Accept a chassis goal (planned with A* on the navigation grid from the estimated pose).
+    /// Re-sending the current goal id is a no-op. A refused goal sets `nav_status` to
+    /// `UNREACHABLE` and returns the reason (also kept in [`Sim::nav_refusal`]).
+    pub fn set_nav_goal(&mut self, goal: &NavGoal) -> Result<(), NavRefusal> {
+        self.robot.set_nav_goal(goal, &self.grid)
+    }
+
+    /// Why the current navigation goal was refused or abandoned, if it was.
+    pub fn nav_refusal(&self) -> Option<&NavRefusal> {
+        self.robot.refusal()
+    }
+
+    /// Set the neck target (yaw relative to the base; pitch clamped to the robot's range).
+    pub fn set_neck_goal(&mut self, goal: &NeckGoal) {
+        self.robot.set_neck_goal(goal);
+    }
+
+    /// Advance the simulated time by `dt_ns`: base, neck and odometry move.
+    pub fn step(&mut self, dt_ns: u64) {
+        self.robot.step(dt_ns as f32 * 1e-9, &self.collision);
+        self.time_ns += dt_ns;
+    }
+
+    /// Simulated time, ns (sum of the steps).
+    pub fn time_ns(&self) -> u64 {
+        self.time_ns
+    }
+
+    /// Render a depth frame and detections from the current TRUE camera pose, in place (the
+    /// outputs may be loaned shared-memory samples). Fills sizes, intrinsics, `camera_pose`
+    /// (from the ESTIMATED base pose), headers (`seq` = frame number from 1, `stamp_ns` and
+    /// `sim_time_ns` = `now_ns`; a host may overwrite `stamp_ns`/`seq`, keeping
+    /// `dets.frame_seq` equal to the frame's `seq`) and updates the localization model.
+    /// No heap allocation after the first call.
+    pub fn render(&mut self, frame: &mut DepthFrame, dets: &mut Detections, now_ns: u64) {
+        let cam = *self.camera.camera();
+        let r = &self.robot;
+        let true_pose = self.camera_pose(r.true_pose);
+        let est_pose = self.camera_pose(r.est_pose);
+        self.frames += 1;
+        frame.header.seq = self.frames;
+        frame.header.stamp_ns = now_ns;
+        frame.header.sim_time_ns = now_ns;
+        frame.width = cam.width;
+        frame.height = cam.height;
+        frame.intrinsics = cam.k;
+        frame.camera_pose = affine_to_pose(&est_pose);
+        frame.reserved = 0;
+        self.camera.render(
+            &self.world,
+            &true_pose,
+            self.frames,
+            frame.pixels_mut(),
+            &mut self.buf,
+        );
+        self.loc.count_visible(&cam, &true_pose, &self.buf);
+        self.loc.update(
+            self.robot.camera_turn_rate,
+            self.robot.distance_true,
+            self.time_ns,
+        );
+        self.robot.localized = self.loc.is_ok();
+        self.detector
+            .detect(&self.buf.instance, &cam, &true_pose, self.frames, dets);
+        dets.header = frame.header;
+        dets.frame_seq = frame.header.seq;
+    }
+
+    /// `world_from_camera` for a base pose with the current neck.
+    fn camera_pose(&self, base: [f32; 3]) -> Affine3A {
+        self.mount
+            .camera_pose(base, self.robot.neck_yaw, self.robot.neck_pitch)
+    }
+
+    /// The robot's state as it believes it (estimated pose, odometry covariance), for
+    /// `robot/state`. Header: `sim_time_ns` = `stamp_ns` = simulated time; `seq` is the host's.
+    pub fn robot_state(&self, out: &mut RobotState) {
+        self.fill_state(out, self.robot.est_pose, self.robot.distance_est);
+    }
+
+    /// The true state (same type; ground truth for evaluation and recording only).
+    pub fn true_state(&self) -> RobotState {
+        let mut s = RobotState::default();
+        self.fill_state(&mut s, self.robot.true_pose, self.robot.distance_true);
+        s.odom_cov = [0.0; 9];
+        s
+    }
+
+    fn fill_state(&self, out: &mut RobotState, pose: [f32; 3], distance: f32) {
+        let r = &self.robot;
+        out.header.stamp_ns = self.time_ns;
+        out.header.sim_time_ns = self.time_ns;
+        out.nav_goal_id = r.goal_id;
+        out.base_pose = pose;
+        out.neck_yaw = r.neck_yaw;
+        out.neck_pitch = r.neck_pitch;
+        out.odom_cov = [0.0; 9];
+        out.odom_cov[0] = r.variance[0];
+        out.odom_cov[4] = r.variance[1];
+        out.odom_cov[8] = r.variance[2];
+        out.speed = r.speed;
+        out.distance_m = distance;
+        out.localization_ok = u8::from(self.loc.is_ok());
+        out.nav_status = r.status;
+        out.reserved = [0; 2];
+        out.localization_failures = self.loc.failures();
+    }
+
+    /// The pre-built navigation map (obstacle footprints and walls inflated by the robot
+    /// radius; `FREE`/`OCCUPIED` only). Header: `sim_time_ns` = simulated time.
+    pub fn nav_grid(&self, out: &mut OccupancyGrid) {
+        self.grid.write(out);
+        out.header.stamp_ns = self.time_ns;
+        out.header.sim_time_ns = self.time_ns;
+    }
+
+    /// The navigation grid itself.
+    pub fn grid(&self) -> &NavGrid {
+        &self.grid
+    }
+
+    /// The ground-truth scene (evaluation only).
+    pub fn scene(&self) -> &Scene {
+        &self.scene
+    }
+
+    /// The ray-casting world (ground truth; tests and tools).
+    pub fn world(&self) -> &World {
+        &self.world
+    }
+
+    /// The localization model (feature tracking and failure count).
+    pub fn localization(&self) -> &Localization {
+        &self.loc
+    }
+
+    /// The latest render's scratch images (instance ids, noise-free depth; ground truth).
+    pub fn last_render(&self) -> &RenderBuffers {
+        &self.buf
+    }
+
+    /// TRUE `world_from_camera` of the current state (ground truth).
+    pub fn true_camera_pose(&self) -> Affine3A {
+        self.camera_pose(self.robot.true_pose)
     }
 }
 
-/// `[detector]` section.
-#[derive(Debug, Clone, Default, Deserialize)]
-#[serde(deny_unknown_fields, default)]
-pub struct DetectorConfig {}
-
-impl DetectorConfig {
-    /// Range-check.
-    pub fn validate(&self, _c: &Checker) -> Result<(), ConfigError> {
-        Ok(())
+/// Mix a seed with stream words (splitmix64 finaliser) into an independent 64-bit seed.
+pub(crate) fn mix(seed: u64, words: &[u64]) -> u64 {
+    let mut z = seed ^ 0x9e37_79b9_7f4a_7c15;
+    for w in words {
+        z = z.wrapping_add(*w).wrapping_add(0x9e37_79b9_7f4a_7c15);
+        z = (z ^ (z >> 30)).wrapping_mul(0xbf58_476d_1ce4_e5b9);
+        z = (z ^ (z >> 27)).wrapping_mul(0x94d0_49bb_1331_11eb);
+        z ^= z >> 31;
     }
-}
-
-/// `[robot]` section.
-#[derive(Debug, Clone, Default, Deserialize)]
-#[serde(deny_unknown_fields, default)]
-pub struct RobotConfig {}
-
-impl RobotConfig {
-    /// Range-check.
-    pub fn validate(&self, _c: &Checker) -> Result<(), ConfigError> {
-        Ok(())
-    }
+    z
 }

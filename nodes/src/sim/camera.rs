@@ -1,0 +1,440 @@
+//! The simulated depth camera: ray casting with rayon over image rows, Kinect-like noise.
+
+use super::config::SimConfig;
+use super::detector::{POLY_CAP, convex_hull};
+use super::world::{STRUCTURE, World};
+use crate::config::CameraConfig;
+use crate::geom::Camera;
+use glam::{Affine3A, Mat3, Vec2, Vec3};
+use parry3d::query::Ray;
+use rand::Rng;
+use rand_distr::StandardNormal;
+use rand_pcg::Pcg64;
+use rayon::prelude::*;
+
+/// Scratch images of one render, reused frame to frame (no allocation in steady state).
+#[derive(Debug, Clone)]
+pub struct RenderBuffers {
+    /// Instance per pixel: `k + 1` for scene object `k`, 0 for structure or no hit.
+    pub instance: Vec<u8>,
+    /// Noise-free depth per pixel, metres (0 if the ray hit nothing), regardless of range limits.
+    pub depth_true: Vec<f32>,
+    /// Per object: where it can appear in the image and the camera in its frame.
+    spans: Vec<Span>,
+}
+
+/// View-culling record of one object for one frame.
+#[derive(Debug, Clone, Copy)]
+struct Span {
+    /// Image rows `[y0, y1)` that can contain the object.
+    rows: [u32; 2],
+    /// Convex hull (pixels) of the projected bounding box; `hull_len == 0` = whole rows.
+    hull: [Vec2; POLY_CAP],
+    hull_len: usize,
+    /// Camera centre in the object's frame.
+    origin: Vec3,
+    /// `object_from_camera` rotation: maps a camera-frame ray into the object's frame.
+    rot: Mat3,
+}
+
+impl RenderBuffers {
+    /// Buffers for the largest supported image.
+    pub fn new() -> Self {
+        Self {
+            instance: vec![0; shm_types::MAX_PIXELS],
+            depth_true: vec![0.0; shm_types::MAX_PIXELS],
+            spans: Vec::with_capacity(shm_types::MAX_OBJECTS),
+        }
+    }
+}
+
+impl Default for RenderBuffers {
+    fn default() -> Self {
+        Self::new()
+    }
+}
+
+/// A pinhole depth camera with a Kinect-like noise model.
+///
+/// Depth noise: σ(z) = a + b·z² (Gaussian, metres). A pixel is invalid (0) if its true depth is
+/// outside `[min_range, max_range]`, if the angle between the ray and the surface normal exceeds
+/// the grazing limit, or at random with the dropout probability. Every pixel's noise comes from a
+/// PCG stream derived from (seed, frame index, row), so a frame is the same whatever the threads.
+#[derive(Debug, Clone)]
+pub struct DepthCamera {
+    camera: Camera,
+    noise_a: f32,
+    noise_b: f32,
+    cos_grazing: f32,
+    dropout: f32,
+    seed: u64,
+}
+
+impl Span {
+    /// Pixel columns `[x0, x1)` of image row centre `y` that may see the object (a pixel of
+    /// margin around the hull), `None` if none.
+    fn columns(&self, y: f32, width: usize) -> Option<(usize, usize)> {
+        if self.hull_len == 0 {
+            return Some((0, width));
+        }
+        let n = self.hull_len;
+        let (mut lo, mut hi) = (f32::INFINITY, f32::NEG_INFINITY);
+        for i in 0..n {
+            let (p, q) = (self.hull[i], self.hull[(i + 1) % n]);
+            if (p.y - y) * (q.y - y) > 0.0 {
+                continue;
+            }
+            let x = if (q.y - p.y).abs() < 1e-9 {
+                lo = lo.min(p.x.min(q.x));
+                p.x.max(q.x)
+            } else {
+                p.x + (y - p.y) * (q.x - p.x) / (q.y - p.y)
+            };
+            (lo, hi) = (lo.min(x), hi.max(x));
+        }
+        if lo > hi {
+            // The row centre misses the hull, but its pixels' margin may not: take the band.
+            let (a, b) = self.hull[..n]
+                .iter()
+                .filter(|p| (p.y - y).abs() <= 1.5)
+                .fold((f32::INFINITY, f32::NEG_INFINITY), |(a, b), p| {
+                    (a.min(p.x), b.max(p.x))
+                });
+            (lo, hi) = (a, b);
+        }
+        if lo > hi {
+            return None;
+        }
+        let x0 = (lo - 1.5).floor().clamp(0.0, width as f32) as usize;
+        let x1 = (hi + 1.5).ceil().clamp(0.0, width as f32) as usize;
+        (x0 < x1).then_some((x0, x1))
+    }
+}
+
+impl DepthCamera {
+    /// A camera from the `[camera]` and `[sim]` sections, with a noise seed.
+    pub fn new(cam: &CameraConfig, sim: &SimConfig, seed: u64) -> Self {
+        Self {
+            camera: cam.camera(),
+            noise_a: sim.noise_a,
+            noise_b: sim.noise_b,
+            cos_grazing: sim.grazing_deg.to_radians().cos(),
+            dropout: sim.dropout,
+            seed,
+        }
+    }
+
+    /// The same camera without noise or dropouts (grazing and range limits still apply).
+    pub fn noiseless(mut self) -> Self {
+        self.noise_a = 0.0;
+        self.noise_b = 0.0;
+        self.dropout = 0.0;
+        self
+    }
+
+    /// The pinhole model.
+    pub fn camera(&self) -> &Camera {
+        &self.camera
+    }
+
+    /// Render `world` seen from `world_from_camera` (optical frame, the TRUE pose) into
+    /// `depth_mm` (row-major, `width × height` entries, millimetres, 0 = invalid) and `buf`.
+    /// Rows run in parallel on the current rayon pool.
+    ///
+    /// Acceleration: each object's world bounds are projected into the image once per frame
+    /// (view culling; the whole image if a bound is behind the camera); each row then casts
+    /// rays only against the objects whose image rectangle covers it, within those columns,
+    /// after the analytic floor/wall/ceiling hit. Equivalent to [`World::cast`] per pixel.
+    ///
+    /// # Panics
+    /// If `depth_mm` is shorter than `width × height`.
+    pub fn render(
+        &self,
+        world: &World,
+        world_from_camera: &Affine3A,
+        frame_index: u64,
+        depth_mm: &mut [u16],
+        buf: &mut RenderBuffers,
+    ) {
+        let w = self.camera.width as usize;
+        let n = w * self.camera.height as usize;
+        let origin = Vec3::from(world_from_camera.translation);
+        let rot = world_from_camera.matrix3;
+        let k = self.camera.k;
+        let far = k.max_range.max(1.0) * 4.0;
+        self.cull(world, world_from_camera, &mut buf.spans);
+        let spans = &buf.spans;
+        depth_mm[..n]
+            .par_chunks_mut(w)
+            .zip(buf.instance[..n].par_chunks_mut(w))
+            .zip(buf.depth_true[..n].par_chunks_mut(w))
+            .enumerate()
+            .for_each(|(v, ((depth_row, inst_row), true_row))| {
+                let y = (v as f32 + 0.5 - k.cy) / k.fy;
+                let ray = |u: usize| rot * Vec3::new((u as f32 + 0.5 - k.cx) / k.fx, y, 1.0);
+                let mut cos = [0f32; shm_types::MAX_WIDTH];
+                // Room: floor, walls, ceiling.
+                for u in 0..w {
+                    let dir = ray(u);
+                    let (t, normal) = world.room_exit(origin, dir).unwrap_or((0.0, Vec3::Z));
+                    (true_row[u], inst_row[u]) = (t, STRUCTURE);
+                    cos[u] = normal.dot(dir).abs() / dir.length();
+                }
+                // Objects whose image rectangle covers this row.
+                for (obj, s) in spans.iter().enumerate() {
+                    if (v as u32) < s.rows[0] || (v as u32) >= s.rows[1] {
+                        continue;
+                    }
+                    let Some((x0, x1)) = s.columns(v as f32 + 0.5, w) else {
+                        continue;
+                    };
+                    // Local ray direction = rot · (x, y, 1) = row_base + x · col0.
+                    let row_base = s.rot.y_axis * y + s.rot.z_axis;
+                    for u in x0..x1 {
+                        let x = (u as f32 + 0.5 - k.cx) / k.fx;
+                        let local = Ray::new(s.origin, row_base + s.rot.x_axis * x);
+                        let best = if true_row[u] > 0.0 { true_row[u] } else { far };
+                        if let Some((t, normal)) = world.cast_object_local_fast(obj, &local, best)
+                            && t < best
+                        {
+                            (true_row[u], inst_row[u]) = (t, (obj + 1) as u8);
+                            cos[u] = normal.dot(local.dir).abs() / local.dir.length();
+                        }
+                    }
+                }
+                let mut rng = row_rng(self.seed, frame_index, v as u64);
+                for u in 0..w {
+                    let z = true_row[u];
+                    depth_row[u] = if z > 0.0 {
+                        self.measure(z, cos[u], &mut rng)
+                    } else {
+                        0
+                    };
+                }
+            });
+    }
+
+    /// Per object: the image region its bounding box projects to (view culling), into `spans`.
+    fn cull(&self, world: &World, world_from_camera: &Affine3A, spans: &mut Vec<Span>) {
+        let cam_from_world = world_from_camera.inverse();
+        let h = self.camera.height;
+        spans.clear();
+        for obj in 0..world.solid_count() {
+            let mut img = [Vec2::ZERO; 8];
+            let (mut front, mut behind) = (0, 0);
+            for c in world.object_corners(obj) {
+                let p = cam_from_world.transform_point3(c);
+                if p.z <= 1e-3 {
+                    behind += 1;
+                } else if let Some(q) = self.camera.project(p) {
+                    img[front] = q;
+                    front += 1;
+                }
+            }
+            let mut span = Span {
+                rows: [0, 0],
+                hull: [Vec2::ZERO; POLY_CAP],
+                hull_len: 0,
+                origin: Vec3::ZERO,
+                rot: Mat3::IDENTITY,
+            };
+            if front > 0 && behind > 0 {
+                span.rows = [0, h]; // partly behind the camera: every pixel may see it
+            } else if front > 0 {
+                span.hull_len = convex_hull(&mut img, &mut span.hull);
+                let (lo, hi) = span.hull[..span.hull_len]
+                    .iter()
+                    .fold((f32::INFINITY, f32::NEG_INFINITY), |(lo, hi), p| {
+                        (lo.min(p.y), hi.max(p.y))
+                    });
+                let clamp = |v: f32| v.clamp(0.0, h as f32) as u32;
+                span.rows = [clamp(lo.floor() - 1.0), clamp(hi.ceil() + 1.0)];
+            }
+            let pose = world.object_pose(obj);
+            span.origin = pose.inverse_transform_point(world_from_camera.translation.into());
+            span.rot =
+                Mat3::from_quat(pose.rotation.inverse()) * Mat3::from(world_from_camera.matrix3);
+            spans.push(span);
+        }
+    }
+
+    /// Depth reading (mm, 0 = invalid) of a surface at true depth `z` whose normal makes an angle
+    /// with cosine `cos_incidence` with the ray.
+    fn measure(&self, z: f32, cos_incidence: f32, rng: &mut Pcg64) -> u16 {
+        let k = &self.camera.k;
+        if z < k.min_range || z > k.max_range || cos_incidence < self.cos_grazing {
+            return 0;
+        }
+        if self.dropout > 0.0 && rng.random::<f32>() < self.dropout {
+            return 0;
+        }
+        let sigma = self.noise_a + self.noise_b * z * z;
+        let z = if sigma > 0.0 {
+            z + sigma * rng.sample::<f32, _>(StandardNormal)
+        } else {
+            z
+        };
+        // `as` saturates; z > 0 so adding 0.5 rounds to nearest.
+        ((z * 1000.0 + 0.5) as u16).max(1)
+    }
+}
+
+/// A PCG stream for one row of one frame.
+fn row_rng(seed: u64, frame: u64, row: u64) -> Pcg64 {
+    let s = super::mix(seed, &[0x6465_7074, frame, row]);
+    Pcg64::new(
+        s as u128 | ((row as u128) << 64),
+        0xa02b_dbf7_bb3c_0a7a_c28f_a16a_64ab_f96d,
+    )
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::geom::optical_rotation;
+    use crate::sim::scene::Scene;
+    use std::path::Path;
+
+    fn world_with_box_at(x: f32) -> World {
+        World::new(
+            &Scene::parse(
+                Path::new("t.toml"),
+                &format!(
+                    "name = \"t\"\n[room]\nmin = [-6.0, -6.0]\nmax = [6.0, 6.0]\nheight = 3.0\n\
+                     [robot]\nstart = [0.0, 0.0, 0.0]\n\
+                     [[object]]\nname = \"b\"\nclass = \"book\"\ncenter = [{x}, 0.0, 1.0]\n\
+                     size = [0.5, 1.0, 1.0]\n"
+                ),
+            )
+            .unwrap(),
+        )
+    }
+
+    fn camera(width: u32, height: u32) -> DepthCamera {
+        let cam = CameraConfig {
+            width,
+            height,
+            ..CameraConfig::default()
+        };
+        DepthCamera::new(&cam, &SimConfig::default(), 7)
+    }
+
+    #[test]
+    fn centre_pixel_sees_the_analytic_depth_of_a_box() {
+        // Camera at (0, 0, 1) looking along +x; the box's near face is at x = 2.75 - 0.25.
+        let world = world_with_box_at(2.75);
+        let pose = Affine3A::from_mat3_translation(optical_rotation(0.0, 0.0), Vec3::Z);
+        for (w, h) in [(640, 480), (320, 240), (161, 97)] {
+            let cam = camera(w, h).noiseless();
+            let mut depth = vec![0u16; (w * h) as usize];
+            let mut buf = RenderBuffers::new();
+            cam.render(&world, &pose, 0, &mut depth, &mut buf);
+            let centre = (h / 2 * w + w / 2) as usize;
+            assert!(
+                (i32::from(depth[centre]) - 2500).abs() <= 1,
+                "{}",
+                depth[centre]
+            );
+            assert_eq!(buf.instance[centre], 1);
+            assert!((buf.depth_true[centre] - 2.5).abs() < 1e-4);
+        }
+    }
+
+    #[test]
+    fn noise_grows_with_depth_and_is_seeded() {
+        let pose = Affine3A::from_mat3_translation(optical_rotation(0.0, 0.0), Vec3::Z);
+        let (w, h) = (64, 48);
+        let stats = |x: f32, seed: u64| {
+            let world = world_with_box_at(x);
+            let cam = DepthCamera::new(
+                &CameraConfig {
+                    width: w,
+                    height: h,
+                    ..CameraConfig::default()
+                },
+                &SimConfig {
+                    dropout: 0.0,
+                    ..SimConfig::default()
+                },
+                seed,
+            );
+            let mut depth = vec![0u16; (w * h) as usize];
+            let mut buf = RenderBuffers::new();
+            cam.render(&world, &pose, 3, &mut depth, &mut buf);
+            let errs: Vec<f32> = (0..depth.len())
+                .filter(|&i| buf.instance[i] == 1 && depth[i] > 0)
+                .map(|i| depth[i] as f32 / 1000.0 - buf.depth_true[i])
+                .collect();
+            let rms = (errs.iter().map(|e| e * e).sum::<f32>() / errs.len() as f32).sqrt();
+            (depth, rms)
+        };
+        let (near, rms_near) = stats(1.25, 1);
+        let (_, rms_far) = stats(3.75, 1);
+        // σ(1 m) ≈ 3.1 mm, σ(3.5 m) ≈ 24.5 mm.
+        assert!(rms_near > 0.0015 && rms_near < 0.0055, "{rms_near}");
+        assert!(rms_far > 0.015 && rms_far < 0.035, "{rms_far}");
+        assert_eq!(stats(1.25, 1).0, near, "same seed, same frame");
+        assert_ne!(stats(1.25, 2).0, near, "different seed, different noise");
+    }
+
+    #[test]
+    fn grazing_and_out_of_range_pixels_are_invalid() {
+        let cam = camera(64, 48).noiseless();
+        let mut rng = row_rng(0, 0, 0);
+        let cos = |deg: f32| deg.to_radians().cos();
+        assert_eq!(cam.measure(2.0, cos(60.0), &mut rng), 2000);
+        assert_eq!(cam.measure(2.0, cos(85.0), &mut rng), 0, "grazing");
+        assert_eq!(cam.measure(0.3, 1.0, &mut rng), 0, "nearer than min range");
+        assert_eq!(cam.measure(5.2, 1.0, &mut rng), 0, "beyond max range");
+        // In a render: straight ahead the wall is 6 m away, beyond 5 m.
+        let world = world_with_box_at(2.75);
+        let mut depth = vec![0u16; 64 * 48];
+        let mut buf = RenderBuffers::new();
+        let pose =
+            Affine3A::from_mat3_translation(optical_rotation(std::f32::consts::PI, 0.0), Vec3::Z);
+        cam.render(&world, &pose, 0, &mut depth, &mut buf);
+        let centre = 24 * 64 + 32;
+        assert_eq!(depth[centre], 0);
+        assert!((buf.depth_true[centre] - 6.0).abs() < 1e-3);
+    }
+
+    #[test]
+    fn culled_render_equals_bvh_ray_casts() {
+        let scene = Scene::builtin("paper-scene-3").unwrap();
+        let world = World::new(&scene);
+        let cam = camera(80, 60).noiseless();
+        let mut depth = vec![0u16; 80 * 60];
+        let mut buf = RenderBuffers::new();
+        let mount = CameraConfig::default().mount;
+        for (x, y, yaw) in [
+            (0.0, 0.0, 3.1),
+            (-2.6, 0.2, 2.0),
+            (-2.7, -0.3, -2.5),
+            (-1.0, 1.5, 3.5),
+        ] {
+            let pose = mount.camera_pose([x, y, yaw], 0.0, mount.pitch());
+            cam.render(&world, &pose, 0, &mut depth, &mut buf);
+            let rot = pose.matrix3;
+            let mut objects = 0;
+            for v in 0..60 {
+                for u in 0..80 {
+                    let i = v * 80 + u;
+                    let dir = rot * cam.camera().ray(u as f32 + 0.5, v as f32 + 0.5);
+                    let hit = world.cast(pose.translation.into(), dir, 100.0).unwrap();
+                    assert_eq!(
+                        buf.instance[i], hit.instance,
+                        "pose ({x}, {y}) pixel ({u}, {v})"
+                    );
+                    assert!(
+                        (buf.depth_true[i] - hit.t).abs() < 1e-4,
+                        "{} {}",
+                        buf.depth_true[i],
+                        hit.t
+                    );
+                    objects += usize::from(hit.instance != STRUCTURE);
+                }
+            }
+            assert!(objects > 0, "pose ({x}, {y}) sees no object");
+        }
+    }
+}

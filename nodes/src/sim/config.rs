@@ -1,0 +1,366 @@
+//! The `[sim]`, `[detector]` and `[robot]` sections of the configuration.
+
+use runtime::config::{Checker, ConfigError};
+use serde::Deserialize;
+
+/// `[sim]` section: the world and the depth sensor's noise model.
+#[derive(Debug, Clone, PartialEq, Deserialize)]
+#[serde(deny_unknown_fields, default)]
+pub struct SimConfig {
+    /// Scene to load: a built-in scene name (`paper-scene-1`..`3`) or a path to a scene file.
+    pub scene: String,
+    /// Depth noise σ(z) = `noise_a` + `noise_b`·z² (metres, z in metres; Kinect-like).
+    pub noise_a: f32,
+    /// Quadratic coefficient of the depth noise, 1/m.
+    pub noise_b: f32,
+    /// A pixel is invalid (0) when the angle between its ray and the surface normal exceeds this, degrees.
+    pub grazing_deg: f32,
+    /// Probability that any valid pixel drops out (0) at random.
+    pub dropout: f32,
+    /// Localization features per m² on object surfaces (textured).
+    pub feature_density_objects: f32,
+    /// Localization features per m² on the room walls (mostly plain).
+    pub feature_density_walls: f32,
+    /// Visual tracking fails when fewer features than this are seen in two consecutive frames.
+    pub min_tracked_features: u32,
+    /// Tracking fails (motion blur) when the camera turns faster than this, degrees per second.
+    pub max_track_rate_deg_s: f32,
+    /// A lost-tracking episode counts as a localization failure once it has lasted longer than this, s.
+    pub failure_min_duration_s: f32,
+    /// ... and the base has driven farther than this during it, metres (paper: 1 s and 0.3 m).
+    pub failure_min_distance_m: f32,
+}
+
+impl Default for SimConfig {
+    fn default() -> Self {
+        Self {
+            scene: "paper-scene-1".into(),
+            noise_a: 0.0012,
+            noise_b: 0.0019,
+            grazing_deg: 82.0,
+            dropout: 0.002,
+            feature_density_objects: 150.0,
+            feature_density_walls: 4.0,
+            min_tracked_features: 30,
+            max_track_rate_deg_s: 100.0,
+            failure_min_duration_s: 1.0,
+            failure_min_distance_m: 0.3,
+        }
+    }
+}
+
+impl SimConfig {
+    /// Range-check.
+    pub fn validate(&self, c: &Checker) -> Result<(), ConfigError> {
+        c.require(
+            !self.scene.is_empty(),
+            "sim.scene",
+            "\"\"",
+            "must name a scene",
+        )?;
+        c.in_range("sim.noise_a", self.noise_a.into(), 0.0, 0.5)?;
+        c.in_range("sim.noise_b", self.noise_b.into(), 0.0, 0.5)?;
+        c.in_range("sim.grazing_deg", self.grazing_deg.into(), 1.0, 90.0)?;
+        c.in_range("sim.dropout", self.dropout.into(), 0.0, 1.0)?;
+        c.in_range(
+            "sim.feature_density_objects",
+            self.feature_density_objects.into(),
+            0.0,
+            10_000.0,
+        )?;
+        c.in_range(
+            "sim.feature_density_walls",
+            self.feature_density_walls.into(),
+            0.0,
+            10_000.0,
+        )?;
+        c.count(
+            "sim.min_tracked_features",
+            self.min_tracked_features as usize,
+            0,
+            100_000,
+        )?;
+        c.positive("sim.max_track_rate_deg_s", self.max_track_rate_deg_s.into())?;
+        c.in_range(
+            "sim.failure_min_duration_s",
+            self.failure_min_duration_s.into(),
+            0.0,
+            3600.0,
+        )?;
+        c.in_range(
+            "sim.failure_min_distance_m",
+            self.failure_min_distance_m.into(),
+            0.0,
+            1000.0,
+        )
+    }
+}
+
+/// `[detector]` section: the simulated instance-segmentation detector (YOLO stand-in).
+#[derive(Debug, Clone, PartialEq, Deserialize)]
+#[serde(deny_unknown_fields, default)]
+pub struct DetectorConfig {
+    /// Objects with fewer visible pixels are never detected.
+    pub min_pixels: u32,
+    /// Miss probability of a large, fully visible object.
+    pub miss_rate: f32,
+    /// Extra miss probability for a small object, scaled by `1 − pixels / small_pixels`.
+    pub miss_small: f32,
+    /// Objects with fewer visible pixels than this count as small.
+    pub small_pixels: u32,
+    /// Extra miss probability for an occluded object, scaled by its hidden fraction.
+    pub miss_occluded: f32,
+    /// Mean score of a fully visible detection.
+    pub score_mean: f32,
+    /// Standard deviation of the score.
+    pub score_std: f32,
+    /// Box edge jitter σ, pixels.
+    pub box_jitter_px: f32,
+    /// Box edge jitter σ as a fraction of the box size.
+    pub box_jitter_frac: f32,
+    /// Masks grow by a random 0..=`mask_bleed_px` pixels onto neighbours and background.
+    pub mask_bleed_px: u32,
+    /// Probability that a detection of a look-alike class gets another class of its group.
+    pub confusion_rate: f32,
+    /// Groups of look-alike COCO classes.
+    pub confusion_groups: Vec<Vec<String>>,
+}
+
+impl Default for DetectorConfig {
+    fn default() -> Self {
+        Self {
+            min_pixels: 40,
+            miss_rate: 0.03,
+            miss_small: 0.4,
+            small_pixels: 1500,
+            miss_occluded: 0.5,
+            score_mean: 0.85,
+            score_std: 0.06,
+            box_jitter_px: 1.5,
+            box_jitter_frac: 0.02,
+            mask_bleed_px: 2,
+            confusion_rate: 0.05,
+            confusion_groups: vec![
+                vec!["cup".into(), "bottle".into(), "vase".into()],
+                vec!["book".into(), "keyboard".into()],
+            ],
+        }
+    }
+}
+
+impl DetectorConfig {
+    /// Range-check.
+    pub fn validate(&self, c: &Checker) -> Result<(), ConfigError> {
+        c.count(
+            "detector.min_pixels",
+            self.min_pixels as usize,
+            1,
+            shm_types::MAX_PIXELS,
+        )?;
+        c.in_range("detector.miss_rate", self.miss_rate.into(), 0.0, 1.0)?;
+        c.in_range("detector.miss_small", self.miss_small.into(), 0.0, 1.0)?;
+        c.count(
+            "detector.small_pixels",
+            self.small_pixels as usize,
+            1,
+            shm_types::MAX_PIXELS,
+        )?;
+        c.in_range(
+            "detector.miss_occluded",
+            self.miss_occluded.into(),
+            0.0,
+            1.0,
+        )?;
+        c.in_range("detector.score_mean", self.score_mean.into(), 0.0, 1.0)?;
+        c.in_range("detector.score_std", self.score_std.into(), 0.0, 1.0)?;
+        c.in_range(
+            "detector.box_jitter_px",
+            self.box_jitter_px.into(),
+            0.0,
+            100.0,
+        )?;
+        c.in_range(
+            "detector.box_jitter_frac",
+            self.box_jitter_frac.into(),
+            0.0,
+            1.0,
+        )?;
+        c.count("detector.mask_bleed_px", self.mask_bleed_px as usize, 0, 16)?;
+        c.in_range(
+            "detector.confusion_rate",
+            self.confusion_rate.into(),
+            0.0,
+            1.0,
+        )?;
+        for (g, group) in self.confusion_groups.iter().enumerate() {
+            for (k, name) in group.iter().enumerate() {
+                c.require(
+                    shm_types::class_id(name).is_some(),
+                    &format!("detector.confusion_groups[{g}][{k}]"),
+                    format!("{name:?}"),
+                    "must be a COCO class name",
+                )?;
+            }
+        }
+        Ok(())
+    }
+}
+
+/// `[robot]` section: base, neck, odometry and the navigation map.
+#[derive(Debug, Clone, PartialEq, Deserialize)]
+#[serde(deny_unknown_fields, default)]
+pub struct RobotConfig {
+    /// Base radius (obstacles are inflated by it), metres.
+    pub radius: f32,
+    /// Maximum linear speed, m/s.
+    pub max_speed: f32,
+    /// Maximum base turn rate, degrees per second.
+    pub max_turn_rate_deg_s: f32,
+    /// Maximum neck slew rate, degrees per second (the neck turns 360°).
+    pub neck_rate_deg_s: f32,
+    /// Lowest camera pitch the neck accepts (positive = down), degrees.
+    pub pitch_min_deg: f32,
+    /// Highest camera pitch the neck accepts; equal to `pitch_min_deg` = fixed pitch (paper).
+    pub pitch_max_deg: f32,
+    /// Position tolerance for reaching a goal, metres.
+    pub goal_tolerance_m: f32,
+    /// Yaw tolerance for reaching a goal, degrees.
+    pub yaw_tolerance_deg: f32,
+    /// Cell size of the navigation grid, metres.
+    pub grid_resolution: f32,
+    /// Odometry translation noise σ per √metre driven (fraction of distance).
+    pub odom_trans_noise: f32,
+    /// Odometry yaw noise σ per √radian turned.
+    pub odom_rot_noise: f32,
+    /// Odometry yaw noise σ per √metre driven, radians.
+    pub odom_rot_per_m: f32,
+    /// Odometry noise multiplier while visual localization is lost.
+    pub lost_drift_factor: f32,
+    /// Rate (1/s) at which visual localization pulls the estimate back to the truth while tracking.
+    pub slam_correction_rate: f32,
+    /// Integration substep, seconds.
+    pub substep_s: f32,
+}
+
+impl Default for RobotConfig {
+    fn default() -> Self {
+        Self {
+            radius: 0.3,
+            max_speed: 0.4,
+            max_turn_rate_deg_s: 45.0,
+            neck_rate_deg_s: 60.0,
+            pitch_min_deg: 28.0,
+            pitch_max_deg: 28.0,
+            goal_tolerance_m: 0.05,
+            yaw_tolerance_deg: 3.0,
+            grid_resolution: 0.05,
+            odom_trans_noise: 0.02,
+            odom_rot_noise: 0.02,
+            odom_rot_per_m: 0.01,
+            lost_drift_factor: 3.0,
+            slam_correction_rate: 2.0,
+            substep_s: 0.01,
+        }
+    }
+}
+
+impl RobotConfig {
+    /// Range-check.
+    pub fn validate(&self, c: &Checker) -> Result<(), ConfigError> {
+        c.in_range("robot.radius", self.radius.into(), 0.01, 2.0)?;
+        c.in_range("robot.max_speed", self.max_speed.into(), 0.01, 10.0)?;
+        c.in_range(
+            "robot.max_turn_rate_deg_s",
+            self.max_turn_rate_deg_s.into(),
+            1.0,
+            1000.0,
+        )?;
+        c.in_range(
+            "robot.neck_rate_deg_s",
+            self.neck_rate_deg_s.into(),
+            1.0,
+            2000.0,
+        )?;
+        c.in_range(
+            "robot.pitch_min_deg",
+            self.pitch_min_deg.into(),
+            -89.0,
+            89.0,
+        )?;
+        c.require(
+            self.pitch_max_deg >= self.pitch_min_deg && self.pitch_max_deg <= 89.0,
+            "robot.pitch_max_deg",
+            self.pitch_max_deg,
+            "must be ≥ robot.pitch_min_deg and ≤ 89",
+        )?;
+        c.in_range(
+            "robot.goal_tolerance_m",
+            self.goal_tolerance_m.into(),
+            0.001,
+            1.0,
+        )?;
+        c.in_range(
+            "robot.yaw_tolerance_deg",
+            self.yaw_tolerance_deg.into(),
+            0.01,
+            45.0,
+        )?;
+        c.in_range(
+            "robot.grid_resolution",
+            self.grid_resolution.into(),
+            0.01,
+            1.0,
+        )?;
+        c.in_range(
+            "robot.odom_trans_noise",
+            self.odom_trans_noise.into(),
+            0.0,
+            1.0,
+        )?;
+        c.in_range("robot.odom_rot_noise", self.odom_rot_noise.into(), 0.0, 1.0)?;
+        c.in_range("robot.odom_rot_per_m", self.odom_rot_per_m.into(), 0.0, 1.0)?;
+        c.in_range(
+            "robot.lost_drift_factor",
+            self.lost_drift_factor.into(),
+            1.0,
+            100.0,
+        )?;
+        c.in_range(
+            "robot.slam_correction_rate",
+            self.slam_correction_rate.into(),
+            0.0,
+            1000.0,
+        )?;
+        c.in_range("robot.substep_s", self.substep_s.into(), 0.0001, 0.1)
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::config::Config;
+    use std::path::Path;
+
+    #[test]
+    fn shipped_sections_equal_struct_defaults() {
+        let cfg = Config::builtin();
+        assert_eq!(cfg.sim, SimConfig::default());
+        assert_eq!(cfg.detector, DetectorConfig::default());
+        assert_eq!(cfg.robot, RobotConfig::default());
+    }
+
+    #[test]
+    fn bad_values_name_the_key() {
+        let f = Path::new("t.toml");
+        let e = Config::parse(f, "[sim]\nnoise_b = -1.0\n").unwrap_err();
+        assert_eq!(e.key(), "sim.noise_b");
+        let e =
+            Config::parse(f, "[detector]\nconfusion_groups = [[\"cup\", \"mug\"]]\n").unwrap_err();
+        assert_eq!(e.key(), "detector.confusion_groups[0][1]", "{e}");
+        let e =
+            Config::parse(f, "[robot]\npitch_min_deg = 30.0\npitch_max_deg = 20.0\n").unwrap_err();
+        assert_eq!(e.key(), "robot.pitch_max_deg");
+        let e = Config::parse(f, "[robot]\nspeed = 1.0\n").unwrap_err();
+        assert_eq!(e.key(), "robot.speed", "{e}");
+    }
+}
