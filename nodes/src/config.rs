@@ -192,8 +192,18 @@ impl Default for RunConfig {
 impl RunConfig {
     fn validate(&self, c: &Checker) -> Result<(), ConfigError> {
         c.in_range("run.time_scale", self.time_scale, 0.01, 100.0)?;
-        c.count("run.camera_width", self.camera_width as usize, 0, shm_types::MAX_WIDTH)?;
-        c.count("run.camera_height", self.camera_height as usize, 0, shm_types::MAX_HEIGHT)?;
+        c.count(
+            "run.camera_width",
+            self.camera_width as usize,
+            0,
+            shm_types::MAX_WIDTH,
+        )?;
+        c.count(
+            "run.camera_height",
+            self.camera_height as usize,
+            0,
+            shm_types::MAX_HEIGHT,
+        )?;
         c.in_range("run.max_sim_s", self.max_sim_s, 1.0, 86_400.0)?;
         c.count("run.max_restarts", self.max_restarts as usize, 0, 100)?;
         c.in_range("run.stop_grace_s", self.stop_grace_s, 0.1, 600.0)
@@ -233,8 +243,18 @@ impl Default for BenchConfig {
 
 impl BenchConfig {
     fn validate(&self, c: &Checker) -> Result<(), ConfigError> {
-        c.count("bench.camera_width", self.camera_width as usize, 0, shm_types::MAX_WIDTH)?;
-        c.count("bench.camera_height", self.camera_height as usize, 0, shm_types::MAX_HEIGHT)?;
+        c.count(
+            "bench.camera_width",
+            self.camera_width as usize,
+            0,
+            shm_types::MAX_WIDTH,
+        )?;
+        c.count(
+            "bench.camera_height",
+            self.camera_height as usize,
+            0,
+            shm_types::MAX_HEIGHT,
+        )?;
         c.in_range("bench.camera_hz", self.camera_hz, 0.0, 120.0)?;
         c.in_range("bench.max_sim_s", self.max_sim_s, 1.0, 86_400.0)?;
         c.count("bench.seeds", self.seeds as usize, 1, 1000)?;

@@ -5,6 +5,7 @@
 //! Ground truth stays in `sim` and `eval`: `mapper` and `planner` must not use `sim`'s world types
 //! (a test in `tests/layering.rs` guards this).
 
+pub mod app;
 pub mod config;
 pub mod eval;
 pub mod geom;

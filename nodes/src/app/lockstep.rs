@@ -80,7 +80,10 @@ pub fn ground_truth(scene: &Scene) -> Vec<GtObject> {
 
 /// The room outline for plots.
 pub fn room(scene: &Scene) -> eval::Room {
-    eval::Room { min: scene.room.min, max: scene.room.max }
+    eval::Room {
+        min: scene.room.min.into(),
+        max: scene.room.max.into(),
+    }
 }
 
 /// Run one session to termination (or `max_sim_s`), calling `progress` about once per second.
@@ -105,8 +108,11 @@ pub fn run_session(
 
     let period = |hz: f64| (1e9 / hz).round() as u64;
     let dt = period(cfg.rates.state_hz);
-    let (cam_p, map_p, lbv_p) =
-        (period(cfg.rates.camera_hz), period(cfg.rates.map_hz), period(cfg.planner.lbv_hz));
+    let (cam_p, map_p, lbv_p) = (
+        period(cfg.rates.camera_hz),
+        period(cfg.rates.map_hz),
+        period(cfg.planner.lbv_hz),
+    );
     let (mut next_cam, mut next_map, mut next_lbv, mut next_report) = (0u64, 0u64, 0u64, 0u64);
     let max_ns = (spec.max_sim_s * 1e9) as u64;
     let mut log = SessionLog::starting_at(0);
@@ -136,7 +142,12 @@ pub fn run_session(
             }
             next_lbv += lbv_p;
         }
-        let inputs = PlannerInputs { map: &map, state: &state, nav: &nav, explore: &explore };
+        let inputs = PlannerInputs {
+            map: &map,
+            state: &state,
+            nav: &nav,
+            explore: &explore,
+        };
         let mut step = planner.next_goal(&inputs, t);
         loop {
             step = match step {
@@ -174,10 +185,21 @@ pub fn run_session(
     mapper.write_map(&mut map, end);
     log.finish(end, terminated, &reason);
     let gt = ground_truth(&spec.scene);
-    let run = RunInfo { scene: spec.scene.name.clone(), planner: spec.label.clone(), seed: spec.seed };
+    let run = RunInfo {
+        scene: spec.scene.name.clone(),
+        planner: spec.label.clone(),
+        seed: spec.seed,
+    };
     let est = eval::estimates_from_map(&map);
     let metrics = log.metrics(&run, &gt, &est, &MatchParams::default());
-    Ok(SessionResult { metrics, map, log, summary, gt, frames })
+    Ok(SessionResult {
+        metrics,
+        map,
+        log,
+        summary,
+        gt,
+        frames,
+    })
 }
 
 fn progress_of(t: u64, map: &ObjectMap, planner: &dyn ViewPlanner) -> Progress {
@@ -185,16 +207,25 @@ fn progress_of(t: u64, map: &ObjectMap, planner: &dyn ViewPlanner) -> Progress {
     Progress {
         sim_s: t as f64 * 1e-9,
         objects: objs.len() as u32,
-        complete: objs.iter().filter(|o| !o.is_background() && o.is_complete()).count() as u32,
+        complete: objs
+            .iter()
+            .filter(|o| !o.is_background() && o.is_complete())
+            .count() as u32,
         goals: planner.summary().goals_issued,
     }
 }
 
 /// Write `metrics.json`, `map.json`, `plot.json` and `map.png` of a session into `dir`.
 pub fn write_outputs(spec: &SessionSpec, r: &SessionResult, dir: &Path) -> anyhow::Result<()> {
-    let run = RunInfo { scene: spec.scene.name.clone(), planner: spec.label.clone(), seed: spec.seed };
+    let run = RunInfo {
+        scene: spec.scene.name.clone(),
+        planner: spec.label.clone(),
+        seed: spec.seed,
+    };
     let est = eval::estimates_from_map(&r.map);
-    let plot = r.log.plot_input(&run, room(&spec.scene), &r.gt, &est, &r.metrics);
+    let plot = r
+        .log
+        .plot_input(&run, room(&spec.scene), &r.gt, &est, &r.metrics);
     eval::write_run_outputs(dir, &r.metrics, &est, &plot)?;
     Ok(())
 }

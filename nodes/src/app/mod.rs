@@ -1,0 +1,12 @@
+//! The `vpsom` application: hosting of the pure node logic. Unlike the logic modules, this layer
+//! owns processes, threads, clocks and iceoryx2 ports (through `runtime`).
+//!
+//! | module | what |
+//! |---|---|
+//! | [`lockstep`] | one process, one thread, simulated clock: deterministic sessions (bench, tests) |
+//! | [`bench`] | scenes × planners × seeds on the lockstep host, report and figures |
+//! | [`topics`] | topic names of a live run |
+
+pub mod bench;
+pub mod lockstep;
+pub mod topics;
