@@ -19,7 +19,7 @@ fn main() -> anyhow::Result<()> {
     };
     let t = std::time::Instant::now();
     let r = lockstep::run_session(&spec, |p| {
-        if (p.sim_s as u64) % 20 == 0 {
+        if (p.sim_s as u64).is_multiple_of(20) {
             eprintln!("{p:?}")
         }
     })?;
