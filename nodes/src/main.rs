@@ -1,10 +1,16 @@
 //! `vpsom`: the vpsom-rt command line.
 
-use clap::{Parser, Subcommand};
-use std::path::PathBuf;
+use anyhow::Context;
+use clap::{Args, Parser, Subcommand};
+use nodes::app::{bench, deploy, lockstep};
+use nodes::config::Config;
+use nodes::sim::{BUILTIN_SCENES, Scene};
+use std::path::{Path, PathBuf};
 use std::process::ExitCode;
 
 /// Active sparse object mapping with VP-SOM view planning on a zero-copy real-time runtime.
+///
+/// With no subcommand, runs a full mapping session on the built-in scene (`vpsom run`).
 #[derive(Debug, Parser)]
 #[command(name = "vpsom", version, about, long_about = None)]
 struct Cli {
@@ -17,17 +23,146 @@ struct Cli {
 
 #[derive(Debug, Subcommand)]
 enum Command {
+    /// Run a mapping session: sim, mapper, planner and recorder as processes over iceoryx2.
+    Run(RunCmd),
+    /// Reproduce the paper's experiments: scenes × planners × seeds on the lockstep host.
+    Bench(BenchCmd),
+    /// Re-render tables and plots from saved metrics.json files.
+    Report {
+        /// Run directories or trees containing metrics.json files.
+        #[arg(required = true)]
+        dirs: Vec<PathBuf>,
+        /// Where to write report.md, CSVs and figures (default: the first directory).
+        #[arg(long)]
+        out: Option<PathBuf>,
+    },
+    /// Inspect an MCAP trace.
+    #[command(subcommand)]
+    Trace(TraceCmd),
     /// Print what the runtime can get on this machine (shared memory, scheduling, clocks, CPUs).
     Doctor,
+    /// Run one node process of a `vpsom run` (started by the launcher).
+    #[command(hide = true)]
+    Node {
+        /// sim | mapper | planner | recorder
+        role: String,
+        #[command(flatten)]
+        session: SessionArgs,
+        /// Service namespace.
+        #[arg(long)]
+        ns: String,
+        /// Output directory.
+        #[arg(long)]
+        out: PathBuf,
+        /// Simulated seconds per wall second.
+        #[arg(long)]
+        time_scale: f64,
+    },
+}
+
+#[derive(Debug, Clone, Args)]
+struct SessionArgs {
+    /// Scene: a built-in name (paper-scene-1, -2, -3) or a scene file.
+    #[arg(long, default_value = "paper-scene-1")]
+    scene: String,
+    /// View planner: vpsom | coverage | frontier (or vpsom-no-<term> for an ablation).
+    #[arg(long, default_value = "vpsom")]
+    planner: String,
+    /// Seed of every random process.
+    #[arg(long, default_value_t = 1)]
+    seed: u64,
+}
+
+#[derive(Debug, Args)]
+struct RunCmd {
+    #[command(flatten)]
+    session: SessionArgs,
+    /// Simulated seconds per wall second (default: `[run] time_scale`; a real robot runs at 1).
+    #[arg(long)]
+    time_scale: Option<f64>,
+    /// Output directory (default: out/<scene>-<planner>-<seed>).
+    #[arg(long)]
+    out: Option<PathBuf>,
+    /// Service namespace (default: run<pid>, so concurrent runs never collide).
+    #[arg(long)]
+    ns: Option<String>,
+    /// Run in one process on the lockstep host instead (no IPC; deterministic).
+    #[arg(long)]
+    lockstep: bool,
+}
+
+#[derive(Debug, Args)]
+struct BenchCmd {
+    /// Scenes (repeatable; default: the three paper scenes).
+    #[arg(long = "scene")]
+    scenes: Vec<String>,
+    /// Planners (repeatable; default: vpsom, coverage, frontier).
+    #[arg(long = "planner")]
+    planners: Vec<String>,
+    /// Seeds per scene and planner (default: `[bench] seeds`).
+    #[arg(long)]
+    seeds: Option<u64>,
+    /// Sessions at once (default: one per CPU).
+    #[arg(long)]
+    jobs: Option<usize>,
+    /// Output directory.
+    #[arg(long, default_value = "out/bench")]
+    out: PathBuf,
+    /// Add VP-SOM with each F(v) term disabled.
+    #[arg(long)]
+    ablation: bool,
+}
+
+#[derive(Debug, Subcommand)]
+enum TraceCmd {
+    /// Topics, message counts, time range and drop counts.
+    Info {
+        /// MCAP file.
+        file: PathBuf,
+    },
+    /// Export a JSON channel as CSV to stdout.
+    Export {
+        /// MCAP file.
+        file: PathBuf,
+        /// Topic, e.g. /runtime/deadline.
+        #[arg(long)]
+        topic: String,
+        /// CSV output (the only format).
+        #[arg(long, required = true)]
+        csv: bool,
+    },
 }
 
 fn main() -> ExitCode {
     let cli = Cli::parse();
-    let result = match cli.command {
-        Some(Command::Doctor) | None => doctor(cli.config),
+    let config = cli.config.clone();
+    let command = cli.command.unwrap_or(Command::Run(RunCmd {
+        session: SessionArgs {
+            scene: "paper-scene-1".into(),
+            planner: "vpsom".into(),
+            seed: 1,
+        },
+        time_scale: None,
+        out: None,
+        ns: None,
+        lockstep: false,
+    }));
+    let result = match command {
+        Command::Run(cmd) => run(config, cmd),
+        Command::Bench(cmd) => bench_cmd(config, cmd),
+        Command::Report { dirs, out } => report(&dirs, out),
+        Command::Trace(cmd) => trace(cmd),
+        Command::Doctor => doctor(config),
+        Command::Node {
+            role,
+            session,
+            ns,
+            out,
+            time_scale,
+        } => node(config, &role, session, ns, out, time_scale),
     };
     match result {
-        Ok(()) => ExitCode::SUCCESS,
+        Ok(code) => code,
         Err(e) => {
             eprintln!("error: {e:#}");
             ExitCode::FAILURE
@@ -35,10 +170,253 @@ fn main() -> ExitCode {
     }
 }
 
-fn doctor(config: Option<PathBuf>) -> anyhow::Result<()> {
-    let (_cfg, from) = nodes::config::Config::load_or_default(config.as_deref())?;
+fn load_config(file: Option<&Path>) -> anyhow::Result<Config> {
+    Ok(Config::load_or_default(file)?.0)
+}
+
+fn load_scene(name: &str) -> anyhow::Result<Scene> {
+    Scene::builtin_or_load(name).with_context(|| {
+        format!(
+            "scene {name:?} (built-in scenes: {})",
+            BUILTIN_SCENES.map(|(n, _)| n).join(", ")
+        )
+    })
+}
+
+fn run(config: Option<PathBuf>, cmd: RunCmd) -> anyhow::Result<ExitCode> {
+    let (base, from) = Config::load_or_default(config.as_deref())?;
+    let s = &cmd.session;
+    let scene = load_scene(&s.scene)?;
+    let cfg = deploy::run_config(&base, &s.planner)?;
+    let time_scale = cmd.time_scale.unwrap_or(cfg.run.time_scale);
+    anyhow::ensure!(
+        time_scale.is_finite() && time_scale > 0.0,
+        "--time-scale {time_scale}: must be > 0"
+    );
+    let out = cmd
+        .out
+        .unwrap_or_else(|| PathBuf::from(format!("out/{}-{}-{}", scene.name, s.planner, s.seed)));
+    let ns = cmd
+        .ns
+        .unwrap_or_else(|| format!("run{}", std::process::id()));
+    eprintln!(
+        "vpsom run: scene {} | planner {} | seed {} | camera {}x{} at {} Hz | time scale {} | \
+         config {} | out {}{}",
+        scene.name,
+        s.planner,
+        s.seed,
+        cfg.camera.width,
+        cfg.camera.height,
+        cfg.rates.camera_hz,
+        time_scale,
+        from.display(),
+        out.display(),
+        if cmd.lockstep { " | lockstep" } else { "" },
+    );
+    let metrics = if cmd.lockstep {
+        let spec = lockstep::SessionSpec {
+            scene,
+            config: cfg.clone(),
+            seed: s.seed,
+            label: s.planner.clone(),
+            max_sim_s: cfg.run.max_sim_s,
+        };
+        let r = lockstep::run_session(&spec, |p| {
+            eprint!(
+                "\r{:>6.1}s sim | objects {:>2} | complete {:>2} | goals {:>2}   ",
+                p.sim_s, p.objects, p.complete, p.goals
+            )
+        })?;
+        eprintln!();
+        lockstep::write_outputs(&spec, &r, &out)?;
+        r.metrics
+    } else {
+        let args = deploy::RunArgs {
+            scene: s.scene.clone(),
+            planner: s.planner.clone(),
+            seed: s.seed,
+            time_scale,
+            namespace: ns,
+            out: out.clone(),
+            config_file: config,
+        };
+        let exe = std::env::current_exe().context("locating the vpsom executable")?;
+        let outcome = deploy::run(&args, &cfg, &exe)?;
+        if outcome.failed {
+            print_metrics(&outcome.metrics);
+            anyhow::bail!("{}; outputs saved in {}", outcome.reason, out.display());
+        }
+        outcome.metrics
+    };
+    print_metrics(&metrics);
+    println!("outputs: {}", out.display());
+    Ok(ExitCode::SUCCESS)
+}
+
+fn print_metrics(m: &nodes::eval::Metrics) {
+    let opt = |v: Option<f64>, d: usize| v.map_or("-".to_string(), |x| format!("{x:.d$}"));
+    println!("| metric | value |\n|---|---|");
+    println!(
+        "| scene | {} |\n| planner | {} |\n| seed | {} |",
+        m.scene, m.planner, m.seed
+    );
+    println!(
+        "| terminated | {} ({}) |",
+        m.terminated, m.termination_reason
+    );
+    println!(
+        "| objects (gt / estimated) | {} / {} |",
+        m.objects_gt, m.objects_estimated
+    );
+    println!(
+        "| precision | {:.2} |\n| recall | {:.2} |",
+        m.precision, m.recall
+    );
+    println!(
+        "| IoU | {} |\n| CDE (m) | {} |",
+        opt(m.iou, 3),
+        opt(m.cde_m, 3)
+    );
+    println!(
+        "| path length (m) | {:.2} |\n| time (s) | {:.1} |",
+        m.path_length_m, m.time_s
+    );
+    println!("| non-occlusion | {} |", opt(m.non_occlusion, 3));
+    println!("| localization failures | {} |", m.localization_failures);
+    println!("| deadline misses | {} |", m.deadline_misses);
+}
+
+fn bench_cmd(config: Option<PathBuf>, cmd: BenchCmd) -> anyhow::Result<ExitCode> {
+    let base = load_config(config.as_deref())?;
+    let b = base.bench;
+    let scenes = if cmd.scenes.is_empty() {
+        BUILTIN_SCENES.iter().map(|(n, _)| n.to_string()).collect()
+    } else {
+        cmd.scenes
+    };
+    let mut planners = if cmd.planners.is_empty() {
+        vec!["vpsom".into(), "coverage".into(), "frontier".into()]
+    } else {
+        cmd.planners
+    };
+    if cmd.ablation {
+        planners.extend(
+            nodes::planner::AblationConfig::TERMS
+                .iter()
+                .map(|t| format!("vpsom-no-{t}")),
+        );
+    }
+    let jobs = cmd.jobs.unwrap_or(b.jobs);
+    let jobs = if jobs == 0 {
+        std::thread::available_parallelism().map_or(1, |n| n.get())
+    } else {
+        jobs
+    };
+    let spec = bench::BenchSpec {
+        scenes: scenes
+            .iter()
+            .map(|s| load_scene(s))
+            .collect::<anyhow::Result<_>>()?,
+        planners,
+        seeds: cmd.seeds.unwrap_or(b.seeds),
+        jobs,
+        out: cmd.out,
+        config: base.with_camera(b.camera_width, b.camera_height, b.camera_hz),
+        max_sim_s: b.max_sim_s,
+    };
+    eprintln!(
+        "vpsom bench: {} scene(s) × {} planner(s) × {} seed(s), {} at once, camera {}x{} at {} Hz",
+        spec.scenes.len(),
+        spec.planners.len(),
+        spec.seeds,
+        spec.jobs,
+        spec.config.camera.width,
+        spec.config.camera.height,
+        spec.config.rates.camera_hz
+    );
+    let start = std::time::Instant::now();
+    let outcomes = bench::run_bench(&spec)?;
+    let failed: Vec<_> = outcomes.iter().filter(|o| o.result.is_err()).collect();
+    for f in &failed {
+        eprintln!(
+            "FAILED {}: {}",
+            f.dir.display(),
+            f.result.as_ref().err().map_or("", |e| e)
+        );
+    }
+    println!(
+        "{} runs in {:.0} s; report: {}",
+        outcomes.len(),
+        start.elapsed().as_secs_f64(),
+        spec.out.join("report.md").display()
+    );
+    Ok(if failed.is_empty() {
+        ExitCode::SUCCESS
+    } else {
+        ExitCode::FAILURE
+    })
+}
+
+fn report(dirs: &[PathBuf], out: Option<PathBuf>) -> anyhow::Result<ExitCode> {
+    let out = out.unwrap_or_else(|| dirs[0].clone());
+    let r = nodes::eval::report::report_dirs(dirs, &out)?;
+    println!(
+        "{} runs; report: {}",
+        r.runs,
+        out.join("report.md").display()
+    );
+    Ok(ExitCode::SUCCESS)
+}
+
+fn trace(cmd: TraceCmd) -> anyhow::Result<ExitCode> {
+    use runtime::recorder::inspect;
+    match cmd {
+        TraceCmd::Info { file } => println!("{}", inspect::info(&file)?),
+        TraceCmd::Export {
+            file,
+            topic,
+            csv: _,
+        } => {
+            let mut out = std::io::stdout().lock();
+            let rows = inspect::export_csv(&file, &topic, &mut out)?;
+            eprintln!("{rows} rows");
+        }
+    }
+    Ok(ExitCode::SUCCESS)
+}
+
+fn doctor(config: Option<PathBuf>) -> anyhow::Result<ExitCode> {
+    let (_cfg, from) = Config::load_or_default(config.as_deref())?;
     println!("config: {}", from.display());
     print!("{}", runtime::doctor::Report::gather());
     println!();
-    Ok(())
+    Ok(ExitCode::SUCCESS)
+}
+
+fn node(
+    config: Option<PathBuf>,
+    role: &str,
+    s: SessionArgs,
+    ns: String,
+    out: PathBuf,
+    time_scale: f64,
+) -> anyhow::Result<ExitCode> {
+    let cfg = deploy::run_config(&load_config(config.as_deref())?, &s.planner)?;
+    let args = deploy::RunArgs {
+        scene: s.scene,
+        planner: s.planner,
+        seed: s.seed,
+        time_scale,
+        namespace: ns,
+        out,
+        config_file: config,
+    };
+    match role {
+        "sim" => deploy::sim_node(&args, &cfg)?,
+        "mapper" => deploy::mapper_node(&args, &cfg)?,
+        "planner" => deploy::planner_node(&args, &cfg)?,
+        "recorder" => deploy::recorder_node(&args, &cfg)?,
+        other => anyhow::bail!("unknown node role {other:?} (sim, mapper, planner, recorder)"),
+    }
+    Ok(ExitCode::SUCCESS)
 }

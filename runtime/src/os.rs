@@ -204,6 +204,14 @@ pub fn fs_space(path: &std::path::Path) -> io::Result<(u64, u64)> {
     Ok((st.f_blocks as u64 * frsize, st.f_bavail as u64 * frsize))
 }
 
+/// Send signal `sig` (e.g. `libc::SIGINT`) to process `pid`.
+pub fn send_signal(pid: u32, sig: i32) -> io::Result<()> {
+    let pid =
+        libc::pid_t::try_from(pid).map_err(|_| io::Error::from(io::ErrorKind::InvalidInput))?;
+    // SAFETY: kill(2) takes plain integers and has no memory-safety preconditions.
+    check(unsafe { libc::kill(pid, sig) })
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
@@ -244,12 +252,4 @@ mod tests {
         .join()
         .unwrap();
     }
-}
-
-/// Send signal `sig` (e.g. `libc::SIGINT`) to process `pid`.
-pub fn send_signal(pid: u32, sig: i32) -> io::Result<()> {
-    let pid =
-        libc::pid_t::try_from(pid).map_err(|_| io::Error::from(io::ErrorKind::InvalidInput))?;
-    // SAFETY: kill(2) takes plain integers and has no memory-safety preconditions.
-    check(unsafe { libc::kill(pid, sig) })
 }

@@ -437,7 +437,7 @@ impl PortContext {
     }
 
     fn services<T: Message>(&self, topic: &str) -> Result<Services<T>, PortError> {
-        check_namespace(topic).map_err(|why| PortError::Name {
+        check_topic(topic).map_err(|why| PortError::Name {
             name: topic.into(),
             reason: why.into(),
         })?;

@@ -8,5 +8,6 @@
 //! | [`topics`] | topic names of a live run |
 
 pub mod bench;
+pub mod deploy;
 pub mod lockstep;
 pub mod topics;
