@@ -16,6 +16,7 @@ fn main() -> anyhow::Result<()> {
         seed,
         label: label.into(),
         max_sim_s: 600.0,
+        record: None,
     };
     let t = std::time::Instant::now();
     let r = lockstep::run_session(&spec, |p| {

@@ -220,6 +220,7 @@ fn run(config: Option<PathBuf>, cmd: RunCmd) -> anyhow::Result<ExitCode> {
             seed: s.seed,
             label: s.planner.clone(),
             max_sim_s: cfg.run.max_sim_s,
+            record: Some(out.join("trace.mcap")),
         };
         let r = lockstep::run_session(&spec, |p| {
             eprint!(

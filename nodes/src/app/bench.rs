@@ -55,6 +55,7 @@ pub fn run_bench(spec: &BenchSpec) -> anyhow::Result<Vec<RunOutcome>> {
                     seed,
                     label: label.clone(),
                     max_sim_s: spec.max_sim_s,
+                    record: None,
                 });
             }
         }

@@ -547,26 +547,7 @@ impl PlannerHost {
 pub fn recorder_node(args: &RunArgs, cfg: &Config) -> anyhow::Result<()> {
     let stop = stop_flag()?;
     let scene = Scene::builtin_or_load(&args.scene)?;
-    let setup = RecorderSetup {
-        scene: scene.name.clone(),
-        mount: MountGeometry {
-            height: cfg.camera.mount.height,
-            forward_offset: cfg.camera.mount.forward_offset,
-            hfov_deg: cfg.camera.hfov_deg,
-            vfov_deg: cfg.camera.vfov_deg,
-        },
-        truth: scene
-            .objects
-            .iter()
-            .map(|o| TruthBox {
-                name: o.name.clone(),
-                class: o.class.clone(),
-                center: o.center.to_array(),
-                size: o.size.to_array(),
-                yaw: o.yaw,
-            })
-            .collect(),
-    };
+    let setup = recorder_setup(&scene, cfg);
     std::fs::create_dir_all(&args.out)?;
     let rec = Recorder::create(&args.out.join("trace.mcap"), &cfg.recorder, setup)?;
     let h = rec.handle();
@@ -627,6 +608,30 @@ pub fn recorder_node(args: &RunArgs, cfg: &Config) -> anyhow::Result<()> {
         missed
     );
     Ok(())
+}
+
+/// What the recorder needs to draw: the scene's true cuboids and the camera geometry.
+pub fn recorder_setup(scene: &Scene, cfg: &Config) -> RecorderSetup {
+    RecorderSetup {
+        scene: scene.name.clone(),
+        mount: MountGeometry {
+            height: cfg.camera.mount.height,
+            forward_offset: cfg.camera.mount.forward_offset,
+            hfov_deg: cfg.camera.hfov_deg,
+            vfov_deg: cfg.camera.vfov_deg,
+        },
+        truth: scene
+            .objects
+            .iter()
+            .map(|o| TruthBox {
+                name: o.name.clone(),
+                class: o.class.clone(),
+                center: o.center.to_array(),
+                size: o.size.to_array(),
+                yaw: o.yaw,
+            })
+            .collect(),
+    }
 }
 
 fn wait_for_stop(stop: &AtomicBool, finished: impl Fn() -> bool) {

@@ -15,7 +15,7 @@ use crate::sim::{Scene, Sim};
 use shm_types::{
     DepthFrame, Detections, ObjectMap, OccupancyGrid, PlannerDecision, RobotState, boxed_zeroed,
 };
-use std::path::Path;
+use std::path::{Path, PathBuf};
 
 /// What to run.
 #[derive(Debug, Clone)]
@@ -30,6 +30,27 @@ pub struct SessionSpec {
     pub label: String,
     /// Give up after this much simulated time, seconds.
     pub max_sim_s: f64,
+    /// Record the session to this MCAP file.
+    pub record: Option<PathBuf>,
+}
+
+/// Messages the host handed to the recorder, per kind (to check a trace against).
+#[derive(Debug, Clone, Copy, Default, PartialEq, Eq)]
+pub struct Recorded {
+    /// Depth frames.
+    pub depth: u64,
+    /// Estimated robot states.
+    pub state: u64,
+    /// True robot states.
+    pub truth: u64,
+    /// Object maps.
+    pub map: u64,
+    /// Planner decisions (GBV and LBV).
+    pub decisions: u64,
+    /// Nav goals.
+    pub nav_goals: u64,
+    /// Neck goals.
+    pub neck_goals: u64,
 }
 
 /// Progress, reported about once per simulated second.
@@ -60,6 +81,10 @@ pub struct SessionResult {
     pub gt: Vec<GtObject>,
     /// Frames rendered.
     pub frames: u64,
+    /// What was handed to the recorder (all zero without `record`).
+    pub recorded: Recorded,
+    /// The recorder's own summary (written, dropped), when recording.
+    pub recorder: Option<runtime::recorder::RecorderSummary>,
 }
 
 /// Ground truth of a scene in the scorer's terms.
@@ -105,6 +130,16 @@ pub fn run_session(
     let mut lbv_trace = boxed_zeroed::<PlannerDecision>();
     let mut state = RobotState::default();
     sim.nav_grid(&mut nav);
+    let recorder = match &spec.record {
+        Some(path) => Some(runtime::recorder::Recorder::create(
+            path,
+            &cfg.recorder,
+            super::deploy::recorder_setup(&spec.scene, cfg),
+        )?),
+        None => None,
+    };
+    let rec = recorder.as_ref().map(|r| r.handle());
+    let mut recorded = Recorded::default();
 
     let period = |hz: f64| (1e9 / hz).round() as u64;
     let dt = period(cfg.rates.state_hz);
@@ -127,11 +162,19 @@ pub fn run_session(
             frames += 1;
             sim.robot_state(&mut state);
             mapper.integrate(&frame, &dets, &state)?;
+            if let Some(r) = &rec {
+                r.record_depth(&frame);
+                recorded.depth += 1;
+            }
             next_cam += cam_p;
         }
         if t >= next_map {
             mapper.write_map(&mut map, t);
             mapper.write_grid(&mut explore);
+            if let Some(r) = &rec {
+                r.record_map(&map);
+                recorded.map += 1;
+            }
             next_map += map_p;
         }
         if t >= next_lbv {
@@ -139,6 +182,14 @@ pub fn run_session(
             sim.set_neck_goal(&neck);
             if planner.lbv_decision(&mut lbv_trace) {
                 log.observe_decision(&lbv_trace);
+                if let Some(r) = &rec {
+                    r.record_decision(&lbv_trace);
+                    recorded.decisions += 1;
+                }
+            }
+            if let Some(r) = &rec {
+                r.record_neck_goal(&neck);
+                recorded.neck_goals += 1;
             }
             next_lbv += lbv_p;
         }
@@ -157,6 +208,14 @@ pub fn run_session(
                     let _ = sim.set_nav_goal(&goal);
                     if let Some(d) = planner.take_decision() {
                         log.observe_decision(&d);
+                        if let Some(r) = &rec {
+                            r.record_decision(&d);
+                            recorded.decisions += 1;
+                        }
+                    }
+                    if let Some(r) = &rec {
+                        r.record_nav_goal(&goal);
+                        recorded.nav_goals += 1;
                     }
                     break;
                 }
@@ -167,7 +226,14 @@ pub fn run_session(
                 }
             };
         }
-        log.observe_truth(&sim.true_state());
+        let truth = sim.true_state();
+        log.observe_truth(&truth);
+        if let Some(r) = &rec {
+            r.record_state(&state);
+            r.record_true_state(&truth);
+            recorded.state += 1;
+            recorded.truth += 1;
+        }
         if t >= next_report {
             progress(&progress_of(t, &map, planner.as_ref()));
             next_report += 1_000_000_000;
@@ -192,6 +258,11 @@ pub fn run_session(
     };
     let est = eval::estimates_from_map(&map);
     let metrics = log.metrics(&run, &gt, &est, &MatchParams::default());
+    if let Some(r) = &rec {
+        r.record_metrics(end, serde_json::to_value(&metrics)?);
+    }
+    drop(rec);
+    let recorder = recorder.map(|r| r.finish()).transpose()?;
     Ok(SessionResult {
         metrics,
         map,
@@ -199,6 +270,8 @@ pub fn run_session(
         summary,
         gt,
         frames,
+        recorded,
+        recorder,
     })
 }
 

@@ -1,0 +1,63 @@
+//! `vpsom run` as a user runs it: separate processes over iceoryx2 on the real clock. The session
+//! terminates with every process exited, writes metrics.json and a readable MCAP, leaves no
+//! services behind, and maps as well as the lockstep host does on the same scene.
+
+use std::path::Path;
+use std::process::Command;
+
+fn vpsom(args: &[&str]) -> std::process::Output {
+    let out = Command::new(env!("CARGO_BIN_EXE_vpsom"))
+        .args(args)
+        .output()
+        .unwrap();
+    assert!(
+        out.status.success(),
+        "vpsom {args:?} failed:\n{}\n{}",
+        String::from_utf8_lossy(&out.stdout),
+        String::from_utf8_lossy(&out.stderr)
+    );
+    out
+}
+
+fn metrics(dir: &Path) -> serde_json::Value {
+    let text = std::fs::read_to_string(dir.join("metrics.json")).unwrap();
+    serde_json::from_str(&text).unwrap()
+}
+
+#[test]
+fn multi_process_run_terminates_and_matches_lockstep_quality() {
+    let root = std::env::temp_dir().join(format!("vpsom-run-{}", std::process::id()));
+    let (live, lock) = (root.join("live"), root.join("lockstep"));
+    let ns = format!("test{}", std::process::id());
+    let run = vpsom(&["run", "--ns", &ns, "--out", live.to_str().unwrap()]);
+    let stderr = String::from_utf8_lossy(&run.stderr);
+    for node in ["recorder", "sim", "mapper", "planner"] {
+        assert!(
+            stderr.contains(&format!("{node}: exit code 0")),
+            "{node} did not exit 0:\n{stderr}"
+        );
+    }
+    let m = metrics(&live);
+    // The planner ended the session itself (section 3.4 termination, or no reachable candidate
+    // left), not a time limit, an interruption or a node failure.
+    let reason = m["termination_reason"].as_str().unwrap();
+    assert!(reason.starts_with("planner"), "{m}");
+    assert!(live.join("map.json").is_file() && live.join("map.png").is_file());
+    let info = runtime::recorder::inspect::info(&live.join("trace.mcap")).unwrap();
+    assert!(info.end.complete, "{info}");
+    assert!(
+        info.count("/camera/depth") > 10 && info.count("/map/objects") > 5,
+        "{info}"
+    );
+    assert!(
+        runtime::ports::list_services(&ns).unwrap().is_empty(),
+        "services left behind"
+    );
+
+    vpsom(&["run", "--lockstep", "--out", lock.to_str().unwrap()]);
+    let l = metrics(&lock);
+    assert_eq!(m["recall"], l["recall"], "live {m}\nlockstep {l}");
+    let cde = |v: &serde_json::Value| v["cde_m"].as_f64().unwrap();
+    assert!((cde(&m) - cde(&l)).abs() < 0.02, "live {m}\nlockstep {l}");
+    let _ = std::fs::remove_dir_all(&root);
+}
