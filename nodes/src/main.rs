@@ -213,6 +213,8 @@ fn run(config: Option<PathBuf>, cmd: RunCmd) -> anyhow::Result<ExitCode> {
         out.display(),
         if cmd.lockstep { " | lockstep" } else { "" },
     );
+    std::fs::create_dir_all(&out)
+        .with_context(|| format!("creating output directory {}", out.display()))?;
     let metrics = if cmd.lockstep {
         let spec = lockstep::SessionSpec {
             scene,
