@@ -407,8 +407,8 @@ fn run_case(wire: &Wire, event: bool, sched: &Sched, pub_cpus: &[usize]) -> Resu
 enum Sub<T: Message> {
     // The context owns the iceoryx2 node; it must outlive the port.
     Ports(
-        runtime::ports::Subscriber<T>,
-        #[allow(dead_code)] PortContext,
+        Box<runtime::ports::Subscriber<T>>,
+        #[allow(dead_code)] Box<PortContext>,
     ),
     Raw(Box<RawSub<T>>),
 }
@@ -485,7 +485,7 @@ impl<T: Message> Sub<T> {
         } else {
             let ctx = PortContext::with_namespace(&wire.ports_config(), "rtt-receiver", &wire.ns)?;
             let sub = ctx.subscriber::<T>(TOPIC)?;
-            Ok(Sub::Ports(sub, ctx))
+            Ok(Sub::Ports(Box::new(sub), Box::new(ctx)))
         }
     }
 
@@ -642,8 +642,8 @@ pub fn publisher(wire: &Wire, sched: &Sched) -> Result<()> {
 enum Pub<T: Message> {
     // The context owns the iceoryx2 node; it must outlive the port.
     Ports(
-        runtime::ports::Publisher<T>,
-        #[allow(dead_code)] PortContext,
+        Box<runtime::ports::Publisher<T>>,
+        #[allow(dead_code)] Box<PortContext>,
     ),
     Raw(Box<RawPub<T>>),
 }
@@ -679,7 +679,7 @@ impl<T: Message> Pub<T> {
         } else {
             let ctx = PortContext::with_namespace(&wire.ports_config(), "rtt-publisher", &wire.ns)?;
             let p = ctx.publisher::<T>(TOPIC)?;
-            Ok(Pub::Ports(p, ctx))
+            Ok(Pub::Ports(Box::new(p), Box::new(ctx)))
         }
     }
 
