@@ -124,6 +124,32 @@ pub fn run(
         .spawn()
         .with_context(|| format!("start {cmdline}"))?;
     let mut pipeline = Pipeline(child);
+    // Open the pipeline's services rather than create them with our settings (per-topic
+    // overrides of the run's config, e.g. a larger buffer, must win).
+    let wanted = ["map", "neck/goal", "planner/decision", "deadline"];
+    let t_wait = Instant::now();
+    loop {
+        let have = runtime::ports::list_services(&ns)?;
+        let exists = |t: &str| {
+            let a = format!("vpsom/{ns}/{t}");
+            let b = format!("vpsom/{ns}/{}", t.replace('/', "_"));
+            have.iter().any(|h| *h == a || *h == b)
+        };
+        if wanted.iter().all(|t| exists(t)) {
+            break;
+        }
+        if let Some(status) = pipeline.0.try_wait()? {
+            bail!("the pipeline ({cmdline}) exited early: {status}");
+        }
+        if crate::interrupted() {
+            bail!("interrupted");
+        }
+        if t_wait.elapsed() > Duration::from_secs(60) {
+            let missing: Vec<&str> = wanted.iter().copied().filter(|t| !exists(t)).collect();
+            bail!("the pipeline did not create {missing:?} in namespace {ns} within 60 s");
+        }
+        std::thread::sleep(Duration::from_millis(50));
+    }
     let ctx = PortContext::with_namespace(&ports, "rtt-e2e", &ns)?;
     let map = ctx.subscriber::<ObjectMap>("map")?;
     let neck = subscriber::<NeckGoal>(&ctx, "neck/goal")?;
@@ -138,6 +164,8 @@ pub fn run(
     let mut gbv = Vec::new();
     let mut exec: BTreeMap<String, Vec<u64>> = BTreeMap::new();
     let mut misses: BTreeMap<String, u64> = BTreeMap::new();
+    let mut neck_seen = 0u64;
+    let mut decisions_seen = [0u64; 2];
     while t0.elapsed() < end {
         if crate::interrupted() {
             bail!("interrupted");
@@ -159,6 +187,9 @@ pub fn run(
             }
         }
         while let Some(g) = neck.receive()? {
+            if measuring {
+                neck_seen += 1;
+            }
             if measuring && g.frame_stamp_ns > 0 {
                 let l = g.header.stamp_ns.saturating_sub(g.frame_stamp_ns);
                 frame_lbv.push(l);
@@ -170,6 +201,9 @@ pub fn run(
             }
         }
         while let Some(d) = dec.receive()? {
+            if measuring {
+                decisions_seen[usize::from(d.kind.min(1))] += 1;
+            }
             if measuring && d.kind == decision_kind::GBV {
                 gbv.push(d.eval_ns);
                 log.record(
@@ -226,8 +260,11 @@ pub fn run(
     md += &table_row(&["GBV round".into()], &p_gbv);
     md += &format!(
         "\nLBV deadline misses: {lbv_misses} over {} cycles. Samples lost to overwrite on the harness's \
-         subscribers (not the pipeline's): {lost}.\n",
-        lbv_exec.len()
+         subscribers (not the pipeline's): {lost}. Received while measuring: {neck_seen} neck goals \
+         (those with `frame_stamp_ns` = 0 are not counted above), {} GBV and {} LBV decisions.\n",
+        lbv_exec.len(),
+        decisions_seen[0],
+        decisions_seen[1]
     );
     histogram_png(
         &dir.join("e2e.png"),
