@@ -357,6 +357,10 @@ struct PlannerHost {
     planner: Box<dyn ViewPlanner>,
     pool: WorkerPool<JobOutput>,
     pending: Option<planner::PlannerJob>,
+    /// When the job in the pool was submitted (for the GBV round time), clock ns.
+    submitted_ns: u64,
+    /// Duration of the newest finished job, ns.
+    job_ns: u64,
     map_sub: Subscriber<ObjectMap>,
     state_sub: Subscriber<RobotState>,
     nav_sub: Subscriber<OccupancyGrid>,
@@ -387,6 +391,8 @@ impl PlannerHost {
             planner: planner::make_planner(&cfg.planner, &cfg.camera),
             pool: WorkerPool::new("gbv", &cfg.executor.pool)?,
             pending: None,
+            submitted_ns: 0,
+            job_ns: 0,
             map_sub: ctx.subscriber(topics::MAP)?,
             state_sub: ctx.subscriber(topics::STATE)?,
             nav_sub: ctx.subscriber(topics::NAV_GRID)?,
@@ -454,6 +460,7 @@ impl PlannerHost {
         // Chassis goals: rounds computed on the low-priority pool.
         let mut step = Step::Wait;
         if let Some(done) = self.pool.try_recv() {
+            self.job_ns = self.clock.now_ns().saturating_sub(self.submitted_ns);
             let out = done
                 .result
                 .map_err(|p| anyhow::anyhow!("planning job panicked: {}", p.0))?;
@@ -472,6 +479,7 @@ impl PlannerHost {
         let go_on = self.handle(step, t)?;
         if let Some(job) = self.pending.take() {
             // Only submitted when nothing is outstanding, so the pool has room.
+            self.submitted_ns = self.clock.now_ns();
             if self.pool.try_submit(move || job.run()).is_err() {
                 bail!("worker pool refused a planning job although none was outstanding");
             }
