@@ -566,8 +566,9 @@ impl Mapper {
 
     /// Whether objects `i` and `j` are one object seen twice: same kind (background or not),
     /// compatible classes (background: equal), and strongly overlapping cuboids (background:
-    /// footprints, with supporting planes within 5 cm): IoU ≥ `merge_iou`, or the smaller one's
-    /// centre inside the larger one with ≥ `merge_containment` of its volume (area) inside.
+    /// footprints, whatever their plane heights: a side view of a table yields a sliver whose
+    /// "plane" is any height of its front face): IoU ≥ `merge_iou`, or the smaller one's centre
+    /// inside the larger one with ≥ `merge_containment` of its volume (area) inside.
     fn duplicates(&self, i: usize, j: usize) -> bool {
         let (a, b) = (&self.objects[i], &self.objects[j]);
         if a.background != b.background || a.observations == 0 || b.observations == 0 {
@@ -582,10 +583,6 @@ impl Mapper {
         let (inter, va, vb) = if a.background {
             if a.class_id != b.class_id {
                 return false;
-            }
-            match (a.support_height, b.support_height) {
-                (Some(ha), Some(hb)) if (ha - hb).abs() <= 0.05 => {}
-                _ => return false,
             }
             let area = |c: &cuboid::Box3| c.size.x.max(0.0) * c.size.y.max(0.0);
             (ca.footprint_intersection(cb), area(ca), area(cb))
@@ -1006,7 +1003,7 @@ mod tests {
         assert_eq!(e.key(), "mapper.grid.height");
     }
 
-    /// A table top (points on a plane at 0.72 m over `x0..x1 × y0..y1`) plus its legs' corner.
+    /// A table top: points on a plane at 0.72 m over `x0..x1 × y0..y1`.
     fn table_points(x0: f32, x1: f32, y0: f32, y1: f32) -> Vec<Vec3> {
         let mut v = Vec::new();
         let n = 30;
@@ -1075,6 +1072,17 @@ mod tests {
             &table_points(0.3, 1.3, 0.0, 0.8),
             Vec3::ZERO,
         );
+        // Its front face seen edge-on (4 cm deep band of points from 0.3 to 0.6 m high).
+        let face: Vec<Vec3> = (0..400)
+            .map(|k| {
+                Vec3::new(
+                    0.4 + (k % 20) as f32 * 0.02,
+                    0.01 + (k % 3) as f32 * 0.015,
+                    0.3 + (k / 20) as f32 * 0.015,
+                )
+            })
+            .collect();
+        add(&mut m, table, true, 8, &face, Vec3::ZERO);
         // A cup and a vase (confusable) at the same place, a bottle 30 cm away, a chair table.
         let c = Vec3::new(0.5, 0.4, 0.8);
         let left = Vec3::new(0.5, -1.0, 1.0);
@@ -1096,15 +1104,17 @@ mod tests {
             &cube_points(c + Vec3::X * 0.3, 0.04),
             left,
         );
-        let cup_h = m.objects[2].sopm.as_ref().unwrap().h_sopm();
-        assert_eq!(m.merge_duplicates(), 2);
+        let cup_h = m.objects[3].sopm.as_ref().unwrap().h_sopm();
+        assert!(m.objects[2].support_height.unwrap() < 0.65);
+        assert_eq!(m.merge_duplicates(), 3);
         assert_eq!(m.objects.len(), 3);
         let t = &m.objects[0];
         // Id of the one seen first (id 2, t = 3), union of the footprints.
-        assert_eq!((t.id, t.first_seen_ns, t.observations), (2, 3, 2));
+        assert_eq!((t.id, t.first_seen_ns, t.observations), (2, 3, 3));
         assert!((t.cuboid.size.x - 1.3).abs() < 0.05, "{:?}", t.cuboid);
+        assert!((t.support_height.unwrap() - 0.72).abs() < 0.02);
         let cup = &m.objects[1];
-        assert_eq!((cup.id, cup.observations), (3, 2));
+        assert_eq!((cup.id, cup.observations), (4, 2));
         assert!([id("cup"), id("vase")].contains(&cup.class_id));
         // Both sides' evidence: the merged map is more certain than either half.
         assert!(cup.sopm.as_ref().unwrap().h_sopm() < cup_h - 0.1);
