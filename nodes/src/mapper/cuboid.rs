@@ -240,9 +240,110 @@ impl CuboidScratch {
     }
 }
 
+impl Box3 {
+    /// Volume, m³.
+    pub fn volume(&self) -> f32 {
+        self.size.x.max(0.0) * self.size.y.max(0.0) * self.size.z.max(0.0)
+    }
+
+    /// The footprint's corners (counter-clockwise), world xy.
+    pub fn footprint(&self) -> [Vec2; 4] {
+        let (s, c) = self.yaw.sin_cos();
+        let (hx, hy) = (self.size.x.max(0.0) * 0.5, self.size.y.max(0.0) * 0.5);
+        let o = self.center.truncate();
+        [(-hx, -hy), (hx, -hy), (hx, hy), (-hx, hy)]
+            .map(|(x, y)| o + Vec2::new(c * x - s * y, s * x + c * y))
+    }
+
+    /// Area of the intersection of the two footprints (convex polygon clipping), m².
+    pub fn footprint_intersection(&self, other: &Box3) -> f32 {
+        let mut poly: Vec<Vec2> = self.footprint().to_vec();
+        let clip = other.footprint();
+        let mut next = Vec::with_capacity(8);
+        for k in 0..4 {
+            let (a, b) = (clip[k], clip[(k + 1) % 4]);
+            let e = b - a;
+            // Inside = left of the counter-clockwise edge.
+            let side = |p: Vec2| e.perp_dot(p - a);
+            next.clear();
+            for i in 0..poly.len() {
+                let (p, q) = (poly[i], poly[(i + 1) % poly.len()]);
+                let (sp, sq) = (side(p), side(q));
+                if sp >= 0.0 {
+                    next.push(p);
+                }
+                if (sp >= 0.0) != (sq >= 0.0) {
+                    next.push(p + (q - p) * (sp / (sp - sq)));
+                }
+            }
+            std::mem::swap(&mut poly, &mut next);
+            if poly.len() < 3 {
+                return 0.0;
+            }
+        }
+        let mut area = 0.0;
+        for i in 0..poly.len() {
+            area += poly[i].perp_dot(poly[(i + 1) % poly.len()]);
+        }
+        (area * 0.5).max(0.0)
+    }
+
+    /// Volume of the intersection of two upright cuboids, m³.
+    pub fn intersection_volume(&self, other: &Box3) -> f32 {
+        let top = (self.center.z + self.size.z * 0.5).min(other.center.z + other.size.z * 0.5);
+        let bottom = (self.center.z - self.size.z * 0.5).max(other.center.z - other.size.z * 0.5);
+        if top <= bottom {
+            return 0.0;
+        }
+        self.footprint_intersection(other) * (top - bottom)
+    }
+
+    /// 3D intersection over union.
+    pub fn iou(&self, other: &Box3) -> f32 {
+        let i = self.intersection_volume(other);
+        let u = self.volume() + other.volume() - i;
+        if u > 0.0 { i / u } else { 0.0 }
+    }
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    fn bx(c: [f32; 3], s: [f32; 3], yaw: f32) -> Box3 {
+        Box3 {
+            center: Vec3::from(c),
+            size: Vec3::from(s),
+            yaw,
+        }
+    }
+
+    #[test]
+    fn box_intersections_by_hand() {
+        let a = bx([0.0, 0.0, 0.5], [2.0, 2.0, 1.0], 0.0);
+        // Shifted by 1 m in x and 0.5 m in z: overlap 1 × 2 × 0.5 = 1, union 4 + 4 − 1 = 7.
+        let b = bx([1.0, 0.0, 1.0], [2.0, 2.0, 1.0], 0.0);
+        assert!((a.intersection_volume(&b) - 1.0).abs() < 1e-5);
+        assert!((a.iou(&b) - 1.0 / 7.0).abs() < 1e-5);
+        // A square turned by 45° about the same centre: intersection is the regular octagon of
+        // inradius 1, area 8(√2 − 1).
+        let c = bx(
+            [0.0, 0.0, 0.5],
+            [2.0, 2.0, 1.0],
+            std::f32::consts::FRAC_PI_4,
+        );
+        let octagon = 8.0 * (2f32.sqrt() - 1.0);
+        assert!((a.footprint_intersection(&c) - octagon).abs() < 1e-4);
+        // Disjoint boxes, and a quarter turn (same box).
+        let d = bx([3.0, 0.0, 0.5], [2.0, 2.0, 1.0], 0.3);
+        assert_eq!(a.intersection_volume(&d), 0.0);
+        let e = bx(
+            [0.0, 0.0, 0.5],
+            [2.0, 2.0, 1.0],
+            std::f32::consts::FRAC_PI_2,
+        );
+        assert!((a.iou(&e) - 1.0).abs() < 1e-5);
+    }
 
     #[test]
     fn hull_of_square_with_interior_points() {

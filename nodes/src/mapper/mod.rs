@@ -76,6 +76,12 @@ pub struct MapperConfig {
     pub min_support_height: f32,
     /// Objects with fewer associated detections are not published.
     pub min_observations: u32,
+    /// Duplicate merge: two objects of compatible classes whose cuboids (background: footprints)
+    /// have at least this IoU are one object.
+    pub merge_iou: f32,
+    /// Duplicate merge: ... or when this fraction of the smaller cuboid (footprint) lies inside
+    /// the larger one and the smaller one's centre is inside it.
+    pub merge_containment: f32,
     /// Association.
     pub association: AssociationConfig,
     /// Surface occupancy probability maps.
@@ -101,6 +107,8 @@ impl Default for MapperConfig {
             yaw_keep_tolerance: 0.03,
             min_support_height: 0.2,
             min_observations: 2,
+            merge_iou: 0.3,
+            merge_containment: 0.6,
             association: AssociationConfig::default(),
             sopm: SopmConfig::default(),
             grid: GridConfig::default(),
@@ -252,6 +260,13 @@ impl MapperConfig {
             1,
             1000,
         )?;
+        c.in_range("mapper.merge_iou", self.merge_iou.into(), 0.0, 1.0)?;
+        c.in_range(
+            "mapper.merge_containment",
+            self.merge_containment.into(),
+            0.0,
+            1.0,
+        )?;
         let a = &self.association;
         c.in_range("mapper.association.alpha", a.alpha, 0.0, 1.0)?;
         c.count(
@@ -364,6 +379,25 @@ pub struct FrameStats {
     pub created: u32,
     /// Detections refused (rank-sum test rejected, inside an existing object).
     pub rejected: u32,
+    /// Rank-sum tests run against a visible reference (enough visible points).
+    pub tests: u32,
+    /// ... of which passed (`p > α`).
+    pub tests_passed: u32,
+    /// Duplicate objects merged into older ones after the frame.
+    pub merged: u32,
+}
+
+impl std::ops::AddAssign for FrameStats {
+    fn add_assign(&mut self, o: Self) {
+        self.skipped |= o.skipped;
+        self.used += o.used;
+        self.associated += o.associated;
+        self.created += o.created;
+        self.rejected += o.rejected;
+        self.tests += o.tests;
+        self.tests_passed += o.tests_passed;
+        self.merged += o.merged;
+    }
 }
 
 /// The mapper's state.
@@ -526,7 +560,88 @@ impl Mapper {
             );
         }
         self.det_order = order;
+        stats.merged = self.merge_duplicates();
         Ok(stats)
+    }
+
+    /// Whether objects `i` and `j` are one object seen twice: same kind (background or not),
+    /// compatible classes (background: equal), and strongly overlapping cuboids (background:
+    /// footprints, whatever their plane heights: a side view of a table yields a sliver whose
+    /// "plane" is any height of its front face): IoU ≥ `merge_iou`, or the smaller one's centre
+    /// inside the larger one with ≥ `merge_containment` of its volume (area) inside.
+    fn duplicates(&self, i: usize, j: usize) -> bool {
+        let (a, b) = (&self.objects[i], &self.objects[j]);
+        if a.background != b.background || a.observations == 0 || b.observations == 0 {
+            return false;
+        }
+        let (ca, cb) = (&a.cuboid, &b.cuboid);
+        // Cheap reject: bounding circles apart.
+        let (ra, rb) = (ca.size.truncate().length(), cb.size.truncate().length());
+        if ca.center.truncate().distance(cb.center.truncate()) > 0.5 * (ra + rb) {
+            return false;
+        }
+        let (inter, va, vb) = if a.background {
+            if a.class_id != b.class_id {
+                return false;
+            }
+            let area = |c: &cuboid::Box3| c.size.x.max(0.0) * c.size.y.max(0.0);
+            (ca.footprint_intersection(cb), area(ca), area(cb))
+        } else {
+            if !self.groups.compatible(a.class_id, b.class_id) {
+                return false;
+            }
+            (ca.intersection_volume(cb), ca.volume(), cb.volume())
+        };
+        if inter <= 0.0 {
+            return false;
+        }
+        let union = va + vb - inter;
+        if union > 0.0 && inter / union >= self.cfg.merge_iou {
+            return true;
+        }
+        let (small, large, v_small) = if va <= vb { (a, b, va) } else { (b, a, vb) };
+        let mut probe = small.cuboid.center;
+        if a.background {
+            probe.z = large.cuboid.center.z;
+        }
+        v_small > 0.0 && inter / v_small >= self.cfg.merge_containment && large.contains(probe, 0.0)
+    }
+
+    /// Merge duplicate objects into the older one (see [`MappedObject::absorb`]); the cuboid is
+    /// refitted from the merged cloud. Returns the number of objects merged away. Clusters follow
+    /// automatically: a foreground object's cluster is looked up among the surviving background
+    /// objects when the map is written.
+    fn merge_duplicates(&mut self) -> u32 {
+        let mut merged = 0;
+        let fit = self.fit_params();
+        'outer: loop {
+            for i in 0..self.objects.len() {
+                for j in i + 1..self.objects.len() {
+                    if !self.duplicates(i, j) {
+                        continue;
+                    }
+                    let (oi, oj) = (&self.objects[i], &self.objects[j]);
+                    let (keep, drop) = if (oi.first_seen_ns, oi.id) <= (oj.first_seen_ns, oj.id) {
+                        (i, j)
+                    } else {
+                        (j, i)
+                    };
+                    let gone = self.objects.remove(drop);
+                    let keep = if drop < keep { keep - 1 } else { keep };
+                    let o = &mut self.objects[keep];
+                    o.absorb(&gone);
+                    let dyaw = o.refit(&mut self.cuboid_scratch, &mut self.centroids, &fit);
+                    if !o.background {
+                        rest_on_support(&mut o.cuboid, &self.supports, self.cfg.support_margin);
+                    }
+                    o.follow_yaw(dyaw);
+                    merged += 1;
+                    continue 'outer;
+                }
+            }
+            break;
+        }
+        merged
     }
 
     fn refresh_supports(&mut self) {
@@ -631,6 +746,8 @@ impl Mapper {
                 let max = a.max_test_points as usize;
                 let (p, accepted) = if self.test_q.len() >= a.min_reference as usize {
                     let r = self.ranks.test_points(&self.test_p, &self.test_q, max);
+                    stats.tests += 1;
+                    stats.tests_passed += (r.p > a.alpha) as u32;
                     (r.p, r.p > a.alpha)
                 } else {
                     o.all_reference(&mut self.test_q);
@@ -884,6 +1001,127 @@ mod tests {
         assert_eq!(e.key(), "mapper.association.alpha");
         let e = crate::config::Config::parse(f, "[mapper.grid]\nwidth = 512\n").unwrap_err();
         assert_eq!(e.key(), "mapper.grid.height");
+    }
+
+    /// A table top: points on a plane at 0.72 m over `x0..x1 × y0..y1`.
+    fn table_points(x0: f32, x1: f32, y0: f32, y1: f32) -> Vec<Vec3> {
+        let mut v = Vec::new();
+        let n = 30;
+        for i in 0..=n {
+            for j in 0..=n {
+                let (fx, fy) = (i as f32 / n as f32, j as f32 / n as f32);
+                v.push(Vec3::new(x0 + fx * (x1 - x0), y0 + fy * (y1 - y0), 0.72));
+            }
+        }
+        v
+    }
+
+    fn cube_points(c: Vec3, half: f32) -> Vec<Vec3> {
+        let mut v = Vec::new();
+        for i in 0..8 {
+            for j in 0..8 {
+                for k in 0..8 {
+                    let f = |t: i32| (t as f32 / 7.0 * 2.0 - 1.0) * half;
+                    v.push(c + Vec3::new(f(i), f(j), f(k)));
+                }
+            }
+        }
+        v
+    }
+
+    #[test]
+    fn duplicates_merge_into_the_older_object() {
+        let cam = Camera::from_fov(64, 48, 60.0, 46.8, 0.5, 5.0);
+        let mut m = Mapper::new(&MapperConfig::default(), &cam).unwrap();
+        let id = |n| shm_types::class_id(n).unwrap();
+        let table = id("dining table");
+        let fit = m.fit_params();
+        let sopm = m.cfg.sopm.params();
+        let add = |m: &mut Mapper, class, bg: bool, t: u64, pts: &[Vec3], from: Vec3| {
+            let mut o = MappedObject::new(
+                m.next_id,
+                class,
+                0.9,
+                bg,
+                if bg { 0.03 } else { 0.01 },
+                20000,
+                (!bg).then_some(sopm),
+                t,
+            );
+            m.next_id += 1;
+            o.merge(pts, from);
+            o.refit(&mut m.cuboid_scratch, &mut m.centroids, &fit);
+            o.observations = 1;
+            o.update_sopm(pts, from, 0.0);
+            m.objects.push(o);
+        };
+        // The same table seen from two sides: two partial footprints overlapping by 70 %.
+        add(
+            &mut m,
+            table,
+            true,
+            5,
+            &table_points(0.0, 1.0, 0.0, 0.8),
+            Vec3::ZERO,
+        );
+        add(
+            &mut m,
+            table,
+            true,
+            3,
+            &table_points(0.3, 1.3, 0.0, 0.8),
+            Vec3::ZERO,
+        );
+        // Its front face seen edge-on (4 cm deep band of points from 0.3 to 0.6 m high).
+        let face: Vec<Vec3> = (0..400)
+            .map(|k| {
+                Vec3::new(
+                    0.4 + (k % 20) as f32 * 0.02,
+                    0.01 + (k % 3) as f32 * 0.015,
+                    0.3 + (k / 20) as f32 * 0.015,
+                )
+            })
+            .collect();
+        add(&mut m, table, true, 8, &face, Vec3::ZERO);
+        // A cup and a vase (confusable) at the same place, a bottle 30 cm away, a chair table.
+        let c = Vec3::new(0.5, 0.4, 0.8);
+        let left = Vec3::new(0.5, -1.0, 1.0);
+        let right = Vec3::new(0.5, 2.0, 1.0);
+        add(&mut m, id("cup"), false, 7, &cube_points(c, 0.04), left);
+        add(
+            &mut m,
+            id("vase"),
+            false,
+            9,
+            &cube_points(c + Vec3::X * 0.01, 0.04),
+            right,
+        );
+        add(
+            &mut m,
+            id("bottle"),
+            false,
+            9,
+            &cube_points(c + Vec3::X * 0.3, 0.04),
+            left,
+        );
+        let cup_h = m.objects[3].sopm.as_ref().unwrap().h_sopm();
+        assert!(m.objects[2].support_height.unwrap() < 0.65);
+        assert_eq!(m.merge_duplicates(), 3);
+        assert_eq!(m.objects.len(), 3);
+        let t = &m.objects[0];
+        // Id of the one seen first (id 2, t = 3), union of the footprints.
+        assert_eq!((t.id, t.first_seen_ns, t.observations), (2, 3, 3));
+        assert!((t.cuboid.size.x - 1.3).abs() < 0.05, "{:?}", t.cuboid);
+        assert!((t.support_height.unwrap() - 0.72).abs() < 0.02);
+        let cup = &m.objects[1];
+        assert_eq!((cup.id, cup.observations), (4, 2));
+        assert!([id("cup"), id("vase")].contains(&cup.class_id));
+        // Both sides' evidence: the merged map is more certain than either half.
+        assert!(cup.sopm.as_ref().unwrap().h_sopm() < cup_h - 0.1);
+        assert_eq!(m.objects[2].class_id, id("bottle"));
+        // The cup's cluster is the surviving table.
+        m.refresh_supports();
+        assert_eq!(m.cluster_of(&m.objects[1]), 2);
     }
 
     #[test]

@@ -151,6 +151,57 @@ impl MappedObject {
         }
     }
 
+    /// Merge a duplicate of this object into it (the caller then refits the cuboid): voxels
+    /// (re-binned on this object's grid by their centroids, with their point and LoS sums),
+    /// class votes, observation and point counts, `first_seen = min`, `C_asso = max` (the more
+    /// doubtful association wins), and the SOPM evidence aligned by the yaw difference
+    /// ([`Sopm::absorb`]). The id stays this object's.
+    pub fn absorb(&mut self, other: &MappedObject) {
+        let inv = 1.0 / self.voxel_size;
+        for v in &other.voxels {
+            let c = v.centroid();
+            let k = [
+                (c.x * inv).floor() as i32,
+                (c.y * inv).floor() as i32,
+                (c.z * inv).floor() as i32,
+            ];
+            match self.index.get(&k) {
+                Some(&i) => {
+                    let s = &mut self.voxels[i as usize];
+                    s.sum += v.sum;
+                    s.n += v.n;
+                    s.los += v.los;
+                }
+                None if self.voxels.len() < self.max_voxels => {
+                    self.index.insert(k, self.voxels.len() as u32);
+                    self.voxels.push(*v);
+                }
+                None => continue,
+            }
+        }
+        self.point_count = self.point_count.saturating_add(other.point_count);
+        for &(class, score) in &other.votes {
+            match self.votes.iter_mut().find(|v| v.0 == class) {
+                Some(v) => v.1 += score,
+                None => self.votes.push((class, score)),
+            }
+        }
+        if let Some(best) = self.votes.iter().max_by(|a, b| a.1.total_cmp(&b.1)) {
+            self.class_id = best.0;
+        }
+        self.observations = self.observations.saturating_add(other.observations);
+        self.first_seen_ns = self.first_seen_ns.min(other.first_seen_ns);
+        self.c_asso = self.c_asso.max(other.c_asso);
+        if self.support_height.is_none() {
+            self.support_height = other.support_height;
+        }
+        if let (Some(s), Some(o)) = (self.sopm.as_mut(), other.sopm.as_ref()) {
+            let step = std::f32::consts::TAU / s.params().cols as f32;
+            let dyaw = crate::geom::wrap_angle(self.cuboid.yaw - other.cuboid.yaw);
+            s.absorb(o, (dyaw / step).round() as i32);
+        }
+    }
+
     /// Refit the cuboid from the voxel centroids. Returns the yaw change (radians).
     pub fn refit(
         &mut self,
@@ -200,12 +251,20 @@ impl MappedObject {
 
     /// Integrate one frame's points into the SOPM (after [`Self::refit`] returned `dyaw`).
     pub fn update_sopm(&mut self, points: &[Vec3], camera: Vec3, dyaw: f32) {
+        self.follow_yaw(dyaw);
         let frame = self.sopm_frame();
+        if let Some(s) = self.sopm.as_mut() {
+            s.update(&frame, camera, points);
+        }
+    }
+
+    /// Rotate the SOPM after the cuboid's yaw changed by `dyaw`, so its cells keep pointing at
+    /// the same world directions.
+    pub fn follow_yaw(&mut self, dyaw: f32) {
         if let Some(s) = self.sopm.as_mut() {
             let step = std::f32::consts::TAU / s.params().cols as f32;
             // A yaw increase moves every world direction to a lower local angle.
             s.shift_columns((dyaw / step).round() as i32);
-            s.update(&frame, camera, points);
         }
     }
 

@@ -304,6 +304,26 @@ impl Sopm {
         }
     }
 
+    /// Add the evidence of `other` (a map of the same object, e.g. a duplicate being merged):
+    /// `other`'s columns are first rotated by `shift` (as [`Self::shift_columns`] does, to express
+    /// them in this map's angular reference), then per cell the observed flags are or-ed and the
+    /// accumulated point counts `n_p` summed; `n_o` follows (module docs), so the log-odds of
+    /// matching cells add up. Maps of different sizes or shapes are left unchanged (returns false).
+    pub fn absorb(&mut self, other: &Sopm, shift: i32) -> bool {
+        let p = &other.params;
+        if (p.shape, p.rows, p.cols) != (self.params.shape, self.params.rows, self.params.cols) {
+            return false;
+        }
+        let mut o = other.clone();
+        o.shift_columns(shift);
+        for g in 0..self.len() {
+            self.observed[g] |= o.observed[g];
+            self.hits[g] = self.hits[g].saturating_add(o.hits[g]);
+        }
+        self.recompute();
+        true
+    }
+
     /// Log-odds of a cell (eq. 8 summed over frames; `l_0` from `p_prior`).
     fn log_odds(&self, g: usize) -> f32 {
         let l = log_odds(self.params.p_prior)
@@ -457,6 +477,30 @@ mod tests {
         assert_eq!((m.occ[1], m.observed[1]), (7, true));
         m.shift_columns(-2);
         assert_eq!((m.occ[3], m.observed[3]), (7, true));
+    }
+
+    #[test]
+    fn absorbing_a_rotated_duplicate_sums_matching_cells() {
+        let mut a = Sopm::new(params(SopmShape::Cylinder));
+        let mut b = Sopm::new(params(SopmShape::Cylinder));
+        // Column 3 of `a` sees 4 points in row 0; `b` saw the same world direction in column 1
+        // (its yaw is 2 columns larger), 6 points, and row 1 of that column empty (free).
+        a.observed[3] = true;
+        a.hits[3] = 4;
+        b.observed[1] = true;
+        b.hits[1] = 6;
+        b.observed[18 + 1] = true;
+        a.recompute();
+        assert!(a.absorb(&b, -2));
+        assert_eq!((a.obs(3), a.hits[3]), (10, 10));
+        // The free cell came along with the minimum occupied count of its column.
+        assert_eq!((a.occ[18 + 3], a.free[18 + 3]), (0, 10));
+        assert!(a.observed.iter().filter(|o| **o).count() == 2);
+        let other = Sopm::new(SopmParams {
+            rows: 4,
+            ..params(SopmShape::Cylinder)
+        });
+        assert!(!a.absorb(&other, 0));
     }
 
     #[test]
