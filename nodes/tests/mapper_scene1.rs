@@ -82,6 +82,17 @@ fn circling_the_desk_maps_every_object_once_within_5_cm() {
     let mut map = boxed_zeroed::<ObjectMap>();
     mapper.write_map(&mut map, sim.time_ns());
     let est = map.objects();
+    let listing: Vec<String> = est
+        .iter()
+        .map(|o| {
+            format!(
+                "{} {:.2?} size {:.2?}",
+                class_name(o.class_id),
+                o.center,
+                o.size
+            )
+        })
+        .collect();
     for gt in &scene.objects {
         let same: Vec<_> = est
             .iter()
@@ -94,9 +105,10 @@ fn circling_the_desk_maps_every_object_once_within_5_cm() {
         let limit = if gt.background { 0.10 } else { 0.05 };
         assert!(
             best < limit,
-            "{} ({}): nearest estimate {best:.3} m away; map: {est:#?}",
+            "{} ({}): nearest estimate {best:.3} m away; map:\n{}",
             gt.name,
-            gt.class
+            gt.class,
+            listing.join("\n")
         );
     }
     // No duplicates: no class has more estimates than ground-truth objects.
