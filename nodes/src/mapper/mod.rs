@@ -130,6 +130,10 @@ pub struct AssociationConfig {
     pub gate_margin: f32,
     /// A reference point counts as visible unless it lies this far behind the observed depth, m.
     pub visibility_tolerance: f32,
+    /// A reference point lying more than this in front of the observed depth is not seen by
+    /// the current view either (it projects onto a surface behind it: a grazing side or
+    /// another object), m.
+    pub front_tolerance: f32,
     /// Growth of the detection box when selecting visible reference points, pixels.
     pub bbox_margin_px: f32,
 }
@@ -138,10 +142,11 @@ impl Default for AssociationConfig {
     fn default() -> Self {
         Self {
             alpha: 0.05,
-            max_test_points: 100,
+            max_test_points: 70,
             min_reference: 15,
             gate_margin: 0.05,
             visibility_tolerance: 0.03,
+            front_tolerance: 0.03,
             bbox_margin_px: 4.0,
         }
     }
@@ -292,6 +297,12 @@ impl MapperConfig {
             a.visibility_tolerance.into(),
             0.0,
             1.0,
+        )?;
+        c.in_range(
+            "mapper.association.front_tolerance",
+            a.front_tolerance.into(),
+            0.0,
+            100.0,
         )?;
         c.in_range(
             "mapper.association.bbox_margin_px",
@@ -741,6 +752,7 @@ impl Mapper {
                     det.bbox,
                     a.bbox_margin_px,
                     a.visibility_tolerance,
+                    a.front_tolerance,
                     &mut self.test_q,
                 );
                 let max = a.max_test_points as usize;

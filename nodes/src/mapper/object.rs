@@ -278,7 +278,8 @@ impl MappedObject {
 
     /// The part of the merged cloud the current view can see inside `bbox` (pixels, grown by
     /// `margin_px`): voxel centroids that project into it and are not hidden behind the
-    /// observed depth by more than `tolerance` metres. Written to `out` as arrays.
+    /// observed depth by more than `tolerance` metres nor in front of it by more than `front`
+    /// metres. Written to `out` as arrays.
     #[allow(clippy::too_many_arguments)]
     pub fn visible_reference(
         &self,
@@ -288,6 +289,7 @@ impl MappedObject {
         bbox: [u16; 4],
         margin_px: f32,
         tolerance: f32,
+        front: f32,
         out: &mut Vec<[f32; 3]>,
     ) {
         out.clear();
@@ -318,7 +320,8 @@ impl MappedObject {
             if d == 0 {
                 continue;
             }
-            if pc.z <= d as f32 * 1e-3 + tolerance {
+            let dz = pc.z - d as f32 * 1e-3;
+            if dz <= tolerance && dz >= -front {
                 out.push(c.to_array());
             }
         }
