@@ -70,6 +70,8 @@ pub struct MapperConfig {
     pub max_object_voxels: u32,
     /// Quantile used as robust min/max for cuboid extents.
     pub extent_quantile: f32,
+    /// The same for background footprints (dense, flat tops with few outliers).
+    pub background_extent_quantile: f32,
     /// Keep the previous yaw while its rectangle area is within this fraction of the optimum.
     pub yaw_keep_tolerance: f32,
     /// Lowest supporting-plane height of a background object, metres.
@@ -103,7 +105,8 @@ impl Default for MapperConfig {
             object_voxel: 0.01,
             background_voxel: 0.03,
             max_object_voxels: 20000,
-            extent_quantile: 0.01,
+            extent_quantile: 0.05,
+            background_extent_quantile: 0.01,
             yaw_keep_tolerance: 0.03,
             min_support_height: 0.2,
             min_observations: 2,
@@ -244,6 +247,12 @@ impl MapperConfig {
         c.in_range(
             "mapper.extent_quantile",
             self.extent_quantile.into(),
+            0.0,
+            0.2,
+        )?;
+        c.in_range(
+            "mapper.background_extent_quantile",
+            self.background_extent_quantile.into(),
             0.0,
             0.2,
         )?;
@@ -488,6 +497,7 @@ impl Mapper {
     fn fit_params(&self) -> FitParams {
         FitParams {
             extent_quantile: self.cfg.extent_quantile,
+            background_extent_quantile: self.cfg.background_extent_quantile,
             yaw_keep_tolerance: self.cfg.yaw_keep_tolerance,
             plane_tolerance: self.cfg.support_margin.max(0.01) * 1.5,
             min_support_height: self.cfg.min_support_height,
@@ -1084,12 +1094,12 @@ mod tests {
             &table_points(0.3, 1.3, 0.0, 0.8),
             Vec3::ZERO,
         );
-        // Its front face seen edge-on (4 cm deep band of points from 0.3 to 0.6 m high).
+        // Its front face seen edge-on (8 cm deep band of points from 0.3 to 0.6 m high).
         let face: Vec<Vec3> = (0..400)
             .map(|k| {
                 Vec3::new(
                     0.4 + (k % 20) as f32 * 0.02,
-                    0.01 + (k % 3) as f32 * 0.015,
+                    0.01 + (k % 5) as f32 * 0.02,
                     0.3 + (k / 20) as f32 * 0.015,
                 )
             })

@@ -31,6 +31,8 @@ impl Voxel {
 pub struct FitParams {
     /// Extent quantile (robust min/max).
     pub extent_quantile: f32,
+    /// Extent quantile of background footprints.
+    pub background_extent_quantile: f32,
     /// Relative rectangle-area tolerance under which the previous yaw is kept.
     pub yaw_keep_tolerance: f32,
     /// Half-thickness of a supporting plane (background footprint), metres.
@@ -223,7 +225,7 @@ impl MappedObject {
                         h,
                         p.plane_tolerance,
                         prev,
-                        p.extent_quantile,
+                        p.background_extent_quantile,
                         p.yaw_keep_tolerance,
                     )
                 })
