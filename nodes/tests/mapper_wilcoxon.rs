@@ -66,3 +66,30 @@ fn three_sigma_shift_is_rejected_in_at_least_99_percent_of_trials() {
         .count();
     assert!(rejected * 100 >= trials * 99, "{rejected}/{trials}");
 }
+
+#[test]
+fn shipped_test_size_keeps_size_and_power() {
+    // The mapper subsamples to `max_test_points`; at that size the test must still accept the
+    // same distribution ≥ 90 % of the time (α = 0.05) and reject a 3σ shift ≥ 99 % of the time.
+    let a = nodes::mapper::MapperConfig::default().association;
+    let max = a.max_test_points as usize;
+    let mut rng = Pcg64::seed_from_u64(13);
+    let mut s = RankScratch::default();
+    let trials = 300;
+    let (mut same_ok, mut shift_rejected) = (0, 0);
+    for k in 0..trials {
+        let q = cloud(&mut rng, 500, [0.0; 3]);
+        let p = cloud(&mut rng, 300, [0.0; 3]);
+        same_ok += (s.test_points(&p, &q, max).p > a.alpha) as usize;
+        let axis = k % 3;
+        let mut shift = [0.0; 3];
+        shift[axis] = 3.0 * [0.05, 0.025, 0.1][axis];
+        let p = cloud(&mut rng, 300, shift);
+        shift_rejected += (s.test_points(&p, &q, max).p < a.alpha) as usize;
+    }
+    assert!(same_ok * 100 >= trials * 90, "{same_ok}/{trials}");
+    assert!(
+        shift_rejected * 100 >= trials * 99,
+        "{shift_rejected}/{trials}"
+    );
+}

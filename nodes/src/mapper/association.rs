@@ -11,8 +11,10 @@
 //!
 //! **Reference sample.** The test compares `P` (voxel centroids, same voxel size as the object's
 //! cloud so densities match) with the part `Q'` of the object's merged cloud that the current view
-//! can see: centroids that project into the detection's box and are not hidden behind the observed
-//! depth. Comparing a one-sided view with the whole object would reject every partial view of a
+//! can see: centroids that project into the detection's box and lie at the observed depth (not
+//! hidden behind it by more than `visibility_tolerance`, nor in front of it by more than
+//! `front_tolerance`: a reference point well in front of the observed surface is one this view
+//! does not see either, e.g. a side at a grazing angle that returns no depth). Comparing a one-sided view with the whole object would reject every partial view of a
 //! correct match (its centroid is shifted towards the camera). If `|Q'|` is below
 //! `min_reference` (the view shows a side never seen before), the test has no comparable reference:
 //! the observation is then accepted on the overlap gate alone when the centroid of `P` lies in the

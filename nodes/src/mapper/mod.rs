@@ -70,6 +70,8 @@ pub struct MapperConfig {
     pub max_object_voxels: u32,
     /// Quantile used as robust min/max for cuboid extents.
     pub extent_quantile: f32,
+    /// The same for background footprints (dense, flat tops with few outliers).
+    pub background_extent_quantile: f32,
     /// Keep the previous yaw while its rectangle area is within this fraction of the optimum.
     pub yaw_keep_tolerance: f32,
     /// Lowest supporting-plane height of a background object, metres.
@@ -103,7 +105,8 @@ impl Default for MapperConfig {
             object_voxel: 0.01,
             background_voxel: 0.03,
             max_object_voxels: 20000,
-            extent_quantile: 0.01,
+            extent_quantile: 0.05,
+            background_extent_quantile: 0.01,
             yaw_keep_tolerance: 0.03,
             min_support_height: 0.2,
             min_observations: 2,
@@ -130,6 +133,10 @@ pub struct AssociationConfig {
     pub gate_margin: f32,
     /// A reference point counts as visible unless it lies this far behind the observed depth, m.
     pub visibility_tolerance: f32,
+    /// A reference point lying more than this in front of the observed depth is not seen by
+    /// the current view either (it projects onto a surface behind it: a grazing side or
+    /// another object), m.
+    pub front_tolerance: f32,
     /// Growth of the detection box when selecting visible reference points, pixels.
     pub bbox_margin_px: f32,
 }
@@ -138,10 +145,11 @@ impl Default for AssociationConfig {
     fn default() -> Self {
         Self {
             alpha: 0.05,
-            max_test_points: 100,
+            max_test_points: 70,
             min_reference: 15,
             gate_margin: 0.05,
             visibility_tolerance: 0.03,
+            front_tolerance: 0.03,
             bbox_margin_px: 4.0,
         }
     }
@@ -243,6 +251,12 @@ impl MapperConfig {
             0.2,
         )?;
         c.in_range(
+            "mapper.background_extent_quantile",
+            self.background_extent_quantile.into(),
+            0.0,
+            0.2,
+        )?;
+        c.in_range(
             "mapper.yaw_keep_tolerance",
             self.yaw_keep_tolerance.into(),
             0.0,
@@ -292,6 +306,12 @@ impl MapperConfig {
             a.visibility_tolerance.into(),
             0.0,
             1.0,
+        )?;
+        c.in_range(
+            "mapper.association.front_tolerance",
+            a.front_tolerance.into(),
+            0.0,
+            100.0,
         )?;
         c.in_range(
             "mapper.association.bbox_margin_px",
@@ -477,6 +497,7 @@ impl Mapper {
     fn fit_params(&self) -> FitParams {
         FitParams {
             extent_quantile: self.cfg.extent_quantile,
+            background_extent_quantile: self.cfg.background_extent_quantile,
             yaw_keep_tolerance: self.cfg.yaw_keep_tolerance,
             plane_tolerance: self.cfg.support_margin.max(0.01) * 1.5,
             min_support_height: self.cfg.min_support_height,
@@ -741,6 +762,7 @@ impl Mapper {
                     det.bbox,
                     a.bbox_margin_px,
                     a.visibility_tolerance,
+                    a.front_tolerance,
                     &mut self.test_q,
                 );
                 let max = a.max_test_points as usize;
@@ -1072,12 +1094,12 @@ mod tests {
             &table_points(0.3, 1.3, 0.0, 0.8),
             Vec3::ZERO,
         );
-        // Its front face seen edge-on (4 cm deep band of points from 0.3 to 0.6 m high).
+        // Its front face seen edge-on (8 cm deep band of points from 0.3 to 0.6 m high).
         let face: Vec<Vec3> = (0..400)
             .map(|k| {
                 Vec3::new(
                     0.4 + (k % 20) as f32 * 0.02,
-                    0.01 + (k % 3) as f32 * 0.015,
+                    0.01 + (k % 5) as f32 * 0.02,
                     0.3 + (k / 20) as f32 * 0.015,
                 )
             })

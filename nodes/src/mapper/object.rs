@@ -31,6 +31,8 @@ impl Voxel {
 pub struct FitParams {
     /// Extent quantile (robust min/max).
     pub extent_quantile: f32,
+    /// Extent quantile of background footprints.
+    pub background_extent_quantile: f32,
     /// Relative rectangle-area tolerance under which the previous yaw is kept.
     pub yaw_keep_tolerance: f32,
     /// Half-thickness of a supporting plane (background footprint), metres.
@@ -223,7 +225,7 @@ impl MappedObject {
                         h,
                         p.plane_tolerance,
                         prev,
-                        p.extent_quantile,
+                        p.background_extent_quantile,
                         p.yaw_keep_tolerance,
                     )
                 })
@@ -278,7 +280,8 @@ impl MappedObject {
 
     /// The part of the merged cloud the current view can see inside `bbox` (pixels, grown by
     /// `margin_px`): voxel centroids that project into it and are not hidden behind the
-    /// observed depth by more than `tolerance` metres. Written to `out` as arrays.
+    /// observed depth by more than `tolerance` metres nor in front of it by more than `front`
+    /// metres. Written to `out` as arrays.
     #[allow(clippy::too_many_arguments)]
     pub fn visible_reference(
         &self,
@@ -288,6 +291,7 @@ impl MappedObject {
         bbox: [u16; 4],
         margin_px: f32,
         tolerance: f32,
+        front: f32,
         out: &mut Vec<[f32; 3]>,
     ) {
         out.clear();
@@ -318,7 +322,8 @@ impl MappedObject {
             if d == 0 {
                 continue;
             }
-            if pc.z <= d as f32 * 1e-3 + tolerance {
+            let dz = pc.z - d as f32 * 1e-3;
+            if dz <= tolerance && dz >= -front {
                 out.push(c.to_array());
             }
         }
