@@ -118,7 +118,8 @@ fn circling_the_desk_maps_every_object_once_within_5_cm() {
         let est_n = est.iter().filter(|e| e.class_id == o.class_id).count();
         assert!(
             est_n <= gt_n,
-            "{est_n} estimates of class {class} for {gt_n} objects"
+            "{est_n} estimates of class {class} for {gt_n} objects:\n{}",
+            listing.join("\n")
         );
     }
 }

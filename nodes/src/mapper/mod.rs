@@ -84,6 +84,10 @@ pub struct MapperConfig {
     /// Duplicate merge: ... or when this fraction of the smaller cuboid (footprint) lies inside
     /// the larger one and the smaller one's centre is inside it.
     pub merge_containment: f32,
+    /// Duplicate merge: the containment test grows the larger cuboid by this margin (m), so a
+    /// thin fragment split off an object's edge (mask bleed, grazing views) is still absorbed;
+    /// keep it below the gap between neighbouring objects of one class (~5 cm on a desk).
+    pub merge_margin: f32,
     /// Association.
     pub association: AssociationConfig,
     /// Surface occupancy probability maps.
@@ -112,6 +116,7 @@ impl Default for MapperConfig {
             min_observations: 2,
             merge_iou: 0.3,
             merge_containment: 0.6,
+            merge_margin: 0.03,
             association: AssociationConfig::default(),
             sopm: SopmConfig::default(),
             grid: GridConfig::default(),
@@ -275,6 +280,7 @@ impl MapperConfig {
             1000,
         )?;
         c.in_range("mapper.merge_iou", self.merge_iou.into(), 0.0, 1.0)?;
+        c.in_range("mapper.merge_margin", self.merge_margin.into(), 0.0, 0.5)?;
         c.in_range(
             "mapper.merge_containment",
             self.merge_containment.into(),
@@ -625,7 +631,17 @@ impl Mapper {
         if a.background {
             probe.z = large.cuboid.center.z;
         }
-        v_small > 0.0 && inter / v_small >= self.cfg.merge_containment && large.contains(probe, 0.0)
+        let m = self.cfg.merge_margin;
+        let grown = cuboid::Box3 {
+            size: large.cuboid.size + glam::Vec3::splat(2.0 * m),
+            ..large.cuboid
+        };
+        let inside = if a.background {
+            small.cuboid.footprint_intersection(&grown)
+        } else {
+            small.cuboid.intersection_volume(&grown)
+        };
+        v_small > 0.0 && inside / v_small >= self.cfg.merge_containment && large.contains(probe, m)
     }
 
     /// Merge duplicate objects into the older one (see [`MappedObject::absorb`]); the cuboid is
