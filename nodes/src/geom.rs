@@ -193,7 +193,12 @@ impl Cuboid {
     /// projection, or `None` if no corner is in front of the camera or the box is off-image.
     /// Corners behind the camera are ignored (a conservative approximation).
     pub fn image_box(&self, camera: &Camera, world_from_camera: &Affine3A) -> Option<[f32; 4]> {
-        let cam_from_world = world_from_camera.inverse();
+        self.image_box_in(camera, &world_from_camera.inverse())
+    }
+
+    /// [`image_box`](Self::image_box) given `camera_from_world` (the inverse pose), for callers
+    /// that project many cuboids into one view.
+    pub fn image_box_in(&self, camera: &Camera, cam_from_world: &Affine3A) -> Option<[f32; 4]> {
         let mut b = [
             f32::INFINITY,
             f32::INFINITY,

@@ -50,35 +50,7 @@ impl View {
 
     /// Image box of a cuboid (see [`Cuboid::image_box`]), computed with the cached inverse.
     pub fn image_box(&self, camera: &Camera, cuboid: &Cuboid) -> Option<[f32; 4]> {
-        let mut b = [
-            f32::INFINITY,
-            f32::INFINITY,
-            f32::NEG_INFINITY,
-            f32::NEG_INFINITY,
-        ];
-        let mut any = false;
-        for c in cuboid.corners() {
-            if let Some(px) = camera.project(self.cam_from_world.transform_point3(c)) {
-                any = true;
-                b = [
-                    b[0].min(px.x),
-                    b[1].min(px.y),
-                    b[2].max(px.x),
-                    b[3].max(px.y),
-                ];
-            }
-        }
-        if !any {
-            return None;
-        }
-        let (w, h) = (camera.width as f32, camera.height as f32);
-        let c = [
-            b[0].clamp(0.0, w),
-            b[1].clamp(0.0, h),
-            b[2].clamp(0.0, w),
-            b[3].clamp(0.0, h),
-        ];
-        (c[2] > c[0] && c[3] > c[1]).then_some(c)
+        cuboid.image_box_in(camera, &self.cam_from_world)
     }
 }
 
