@@ -31,7 +31,13 @@ fn load(text: &str) -> Result<Root, ConfigError> {
 fn shipped_defaults_load_and_equal_the_struct_defaults() {
     let root = load(SHIPPED).unwrap();
     assert_eq!(root.executor, ExecutorConfig::default());
-    assert_eq!(root.ports, PortsConfig::default());
+    // The shipped file adds per-topic overrides for the application's topics (the runtime does
+    // not know topic names); everything else equals the struct defaults.
+    let mut ports = root.ports.clone();
+    assert!(!ports.topics.is_empty());
+    ports.topics.clear();
+    assert_eq!(ports, PortsConfig::default());
+    assert_eq!(root.ports.topic("sim/truth").subscriber_buffer, 256);
     assert_eq!(root.executor.policy, SchedPolicy::Fifo);
     assert_eq!(root.executor.miss_policy, MissPolicy::Skip);
     assert_eq!(root.ports.overflow, Overflow::Overwrite);
