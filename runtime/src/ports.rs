@@ -808,6 +808,21 @@ impl<T: Message> Subscriber<T> {
         &self.services.name
     }
 
+    /// Connect to every publisher of the topic now (map their data segments) instead of
+    /// lazily on the next receive; returns the publisher count. A real-time consumer calls this
+    /// before its first cycle so that cycle does not pay for mapping (and, under `mlockall`,
+    /// faulting in) a publisher's shared memory.
+    pub fn connect(&self) -> Result<usize, PortError> {
+        use iceoryx2::port::update_connections::UpdateConnections;
+        self.port
+            .update_connections()
+            .map_err(|e| PortError::Receive {
+                service: self.services.name.clone(),
+                reason: format!("connecting to publishers: {e:?}"),
+            })?;
+        Ok(self.publisher_count())
+    }
+
     /// Publishers currently connected to the topic (any process).
     pub fn publisher_count(&self) -> usize {
         self.services.pubsub.dynamic_config().number_of_publishers()
@@ -847,6 +862,7 @@ mod tests {
         let publ = ctx.publisher::<NeckGoal>("neck").unwrap();
         assert_eq!(publ.subscriber_count(), 1);
         assert_eq!(sub.publisher_count(), 1);
+        assert_eq!(sub.connect().unwrap(), 1);
         assert!(sub.wait(Duration::from_millis(5)).unwrap().is_none());
         for k in 1..=3u64 {
             let mut g = publ.loan().unwrap();
