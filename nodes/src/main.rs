@@ -57,6 +57,9 @@ enum Command {
         /// Simulated seconds per wall second.
         #[arg(long)]
         time_scale: f64,
+        /// Extra GBV candidates kept in the pool (see `vpsom run --gbv-load`).
+        #[arg(long, default_value_t = 0)]
+        gbv_load: usize,
     },
 }
 
@@ -89,6 +92,16 @@ struct RunCmd {
     /// Run in one process on the lockstep host instead (no IPC; deterministic).
     #[arg(long)]
     lockstep: bool,
+    /// Deadline testing: keep the planner's GBV worker pool saturated by evaluating N extra
+    /// candidate views of the current map whenever it has no such job (results discarded);
+    /// the LBV deadline misses then show what full GBV load costs. 0 = off.
+    #[arg(
+        long,
+        value_name = "N",
+        default_value_t = 0,
+        conflicts_with = "lockstep"
+    )]
+    gbv_load: usize,
 }
 
 #[derive(Debug, Args)]
@@ -146,6 +159,7 @@ fn main() -> ExitCode {
         out: None,
         ns: None,
         lockstep: false,
+        gbv_load: 0,
     }));
     let result = match command {
         Command::Run(cmd) => run(config, cmd),
@@ -159,7 +173,8 @@ fn main() -> ExitCode {
             ns,
             out,
             time_scale,
-        } => node(config, &role, session, ns, out, time_scale),
+            gbv_load,
+        } => node(config, &role, session, ns, out, time_scale, gbv_load),
     };
     match result {
         Ok(code) => code,
@@ -242,6 +257,7 @@ fn run(config: Option<PathBuf>, cmd: RunCmd) -> anyhow::Result<ExitCode> {
             namespace: ns,
             out: out.clone(),
             config_file: config,
+            gbv_load: cmd.gbv_load,
         };
         let exe = std::env::current_exe().context("locating the vpsom executable")?;
         let outcome = deploy::run(&args, &cfg, &exe)?;
@@ -403,6 +419,7 @@ fn node(
     ns: String,
     out: PathBuf,
     time_scale: f64,
+    gbv_load: usize,
 ) -> anyhow::Result<ExitCode> {
     let cfg = deploy::run_config(&load_config(config.as_deref())?, &s.planner)?;
     let args = deploy::RunArgs {
@@ -413,6 +430,7 @@ fn node(
         namespace: ns,
         out,
         config_file: config,
+        gbv_load,
     };
     match role {
         "sim" => deploy::sim_node(&args, &cfg)?,

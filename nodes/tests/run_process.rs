@@ -29,8 +29,28 @@ fn multi_process_run_terminates_and_matches_lockstep_quality() {
     let root = std::env::temp_dir().join(format!("vpsom-run-{}", std::process::id()));
     let (live, lock) = (root.join("live"), root.join("lockstep"));
     let ns = format!("test{}", std::process::id());
-    let run = vpsom(&["run", "--ns", &ns, "--out", live.to_str().unwrap()]);
+    // Under GBV load (the pool kept busy with extra evaluations), planning rounds must still
+    // get through and end the session.
+    let run = vpsom(&[
+        "run",
+        "--ns",
+        &ns,
+        "--out",
+        live.to_str().unwrap(),
+        "--gbv-load",
+        "300",
+    ]);
     let stderr = String::from_utf8_lossy(&run.stderr);
+    let load_jobs: u64 = stderr
+        .split("GBV load: ")
+        .nth(1)
+        .and_then(|s| s.split_whitespace().next())
+        .and_then(|n| n.parse().ok())
+        .unwrap_or_else(|| panic!("no GBV load report:\n{stderr}"));
+    assert!(
+        load_jobs > 10,
+        "the load did not run: {load_jobs} jobs\n{stderr}"
+    );
     for node in ["recorder", "sim", "mapper", "planner"] {
         assert!(
             stderr.contains(&format!("{node}: exit code 0")),

@@ -12,6 +12,7 @@ use super::topics;
 use crate::config::Config;
 use crate::eval::{self, MatchParams, RunInfo, SessionLog};
 use crate::mapper::Mapper;
+use crate::planner::gbv::{self, GbvParams};
 use crate::planner::{self, JobOutput, PlannerInputs, Step, ViewPlanner};
 use crate::sim::{Scene, Sim};
 use anyhow::{Context, bail};
@@ -48,6 +49,9 @@ pub struct RunArgs {
     pub out: PathBuf,
     /// Configuration file given on the command line (children load the same one).
     pub config_file: Option<PathBuf>,
+    /// Deadline testing: keep the GBV pool saturated with this many extra candidate views
+    /// (see [`GbvLoad`]); 0 = off.
+    pub gbv_load: usize,
 }
 
 impl RunArgs {
@@ -67,6 +71,8 @@ impl RunArgs {
             self.namespace.clone(),
             "--out".into(),
             self.out.display().to_string(),
+            "--gbv-load".into(),
+            self.gbv_load.to_string(),
         ];
         if let Some(c) = &self.config_file {
             a.push("--config".into());
@@ -308,19 +314,25 @@ pub fn mapper_node(args: &RunArgs, cfg: &Config) -> anyhow::Result<()> {
 pub fn planner_node(args: &RunArgs, cfg: &Config) -> anyhow::Result<()> {
     let stop = stop_flag()?;
     let (events_tx, events_rx) = crossbeam::channel::bounded::<DeadlineEvent>(1024);
-    let (cfg2, ns) = (cfg.clone(), args.namespace.clone());
+    let (cfg2, ns, gbv_load) = (cfg.clone(), args.namespace.clone(), args.gbv_load);
     let finished = Arc::new(AtomicBool::new(false));
     let finished2 = Arc::clone(&finished);
-    let exec = Executor::builder("lbv", wall_period(cfg.planner.lbv_hz, args.time_scale))
+    let period = wall_period(cfg.planner.lbv_hz, args.time_scale);
+    // The budget is execution time on this machine: wall milliseconds, whatever the time scale.
+    let budget_fraction = (cfg.planner.lbv_budget_ms * 1e-3 / period.as_secs_f64()).min(1.0);
+    let exec = Executor::builder("lbv", period)
         .config(&runtime::executor::ExecutorConfig {
             trace: runtime::executor::EventTrace::All,
-            budget_fraction: (cfg.planner.lbv_budget_ms * cfg.planner.lbv_hz / 1000.0).min(1.0),
+            budget_fraction,
             ..cfg.executor.clone()
         })
         .events(events_tx)
         .spawn(move || {
-            let mut host = match PlannerHost::new(&cfg2, &ns, events_rx) {
-                Ok(h) => Some(h),
+            let mut host = match PlannerHost::new(&cfg2, &ns, gbv_load, events_rx) {
+                Ok(h) => {
+                    h.connect_inputs(INPUT_WAIT);
+                    Some(h)
+                }
                 Err(e) => {
                     eprintln!("planner: {e:#}");
                     None
@@ -352,11 +364,97 @@ pub fn planner_node(args: &RunArgs, cfg: &Config) -> anyhow::Result<()> {
     Ok(())
 }
 
+/// What the planner's worker pool returns.
+enum Work {
+    /// A planning round (GBV, frontier or coverage).
+    Round(JobOutput),
+    /// A [`GbvLoad`] evaluation, handing its map buffer back.
+    Load(Box<ObjectMap>),
+}
+
+/// Full GBV load for deadline testing (`vpsom run --gbv-load N`): whenever no load job is in
+/// the pool, `N` GBV candidates (full F(v) with the GBV's α, β) are evaluated there on a copy of
+/// the newest map, on rings around its objects, and the results discarded. The pool's threads
+/// then stay busy for the whole run, as with back-to-back GBV rounds, while the LBV thread
+/// must keep its deadlines. Real planning rounds still run (queued beside the load).
+struct GbvLoad {
+    params: GbvParams,
+    candidates: usize,
+    /// The map buffer, `None` while a load job holds it.
+    spare: Option<Box<ObjectMap>>,
+    /// Load jobs finished.
+    jobs: u64,
+}
+
+impl GbvLoad {
+    fn new(cfg: &Config, candidates: usize) -> Self {
+        let p = &cfg.planner;
+        Self {
+            params: GbvParams {
+                eval: planner::EvalParams::new(p, &cfg.camera),
+                weights: planner::Weights {
+                    alpha: p.gbv.alpha,
+                    beta: p.gbv.beta,
+                },
+                candidates,
+                safe_distance: p.gbv.safe_distance,
+                robot_radius: p.robot_radius,
+                nav_unknown_traversable: p.nav_unknown_traversable,
+                sectors: p.bootstrap.sectors,
+            },
+            candidates,
+            spare: Some(boxed_zeroed()),
+            jobs: 0,
+        }
+    }
+
+    /// The next load job, if none is in the pool.
+    fn next(&mut self, map: &ObjectMap) -> Option<impl FnOnce() -> Work + Send + 'static> {
+        let mut buf = self.spare.take()?;
+        copy_map(map, &mut buf);
+        let (params, n) = (self.params, self.candidates);
+        Some(move || {
+            let poses = load_poses(&buf, n, params.safe_distance);
+            std::hint::black_box(gbv::evaluate_poses(&buf, &poses, None, &params));
+            Work::Load(buf)
+        })
+    }
+
+    fn done(&mut self, buf: Box<ObjectMap>) {
+        self.spare = Some(buf);
+        self.jobs += 1;
+    }
+}
+
+/// `n` base poses `[x, y, yaw]` on rings around the map's objects in turn (around the origin
+/// if the map is empty), each facing its object's centre.
+fn load_poses(map: &ObjectMap, n: usize, safe_distance: f32) -> Vec<[f32; 3]> {
+    let objects = map.objects();
+    (0..n)
+        .map(|i| {
+            let (c, r) = match objects.get(i % objects.len().max(1)) {
+                Some(o) => (o.center, 0.5 * o.size[0].max(o.size[1]) + safe_distance),
+                None => ([0.0; 3], 1.0 + safe_distance),
+            };
+            let a = std::f32::consts::TAU * i as f32 / n as f32;
+            let (sin, cos) = a.sin_cos();
+            let yaw = crate::geom::wrap_angle(a + std::f32::consts::PI);
+            [c[0] + r * cos, c[1] + r * sin, yaw]
+        })
+        .collect()
+}
+
+/// How long the planner waits for its inputs' publishers before its first cycle.
+const INPUT_WAIT: Duration = Duration::from_secs(10);
+
 struct PlannerHost {
     clock: MonotonicClock,
     planner: Box<dyn ViewPlanner>,
-    pool: WorkerPool<JobOutput>,
+    pool: WorkerPool<Work>,
     pending: Option<planner::PlannerJob>,
+    /// A planning job is in the pool.
+    job_outstanding: bool,
+    load: Option<GbvLoad>,
     /// When the job in the pool was submitted (for the GBV round time), clock ns.
     submitted_ns: u64,
     /// Duration of the newest finished job, ns.
@@ -383,6 +481,7 @@ impl PlannerHost {
     fn new(
         cfg: &Config,
         ns: &str,
+        gbv_load: usize,
         events: crossbeam::channel::Receiver<DeadlineEvent>,
     ) -> anyhow::Result<Self> {
         let ctx = PortContext::with_namespace(&cfg.ports, "planner", ns)?;
@@ -391,6 +490,8 @@ impl PlannerHost {
             planner: planner::make_planner(&cfg.planner, &cfg.camera),
             pool: WorkerPool::new("gbv", &cfg.executor.pool)?,
             pending: None,
+            job_outstanding: false,
+            load: (gbv_load > 0).then(|| GbvLoad::new(cfg, gbv_load)),
             submitted_ns: 0,
             job_ns: 0,
             map_sub: ctx.subscriber(topics::MAP)?,
@@ -410,6 +511,43 @@ impl PlannerHost {
             events,
             _ctx: ctx,
         })
+    }
+
+    /// Before the first cycle: wait (up to `timeout`) for a publisher on every input and map
+    /// its shared memory now, so no LBV cycle pays for connecting (which, under `mlockall`,
+    /// faults in the whole segment: tens of ms). Inputs still missing connect lazily later.
+    fn connect_inputs(&self, timeout: Duration) {
+        let deadline = Instant::now() + timeout;
+        loop {
+            let counts = [
+                self.state_sub.connect(),
+                self.map_sub.connect(),
+                self.nav_sub.connect(),
+                self.explore_sub.connect(),
+            ];
+            let missing: Vec<&str> = counts
+                .iter()
+                .zip([
+                    topics::STATE,
+                    topics::MAP,
+                    topics::NAV_GRID,
+                    topics::MAP_GRID,
+                ])
+                .filter(|(c, _)| !matches!(c, Ok(n) if *n > 0))
+                .map(|(_, topic)| topic)
+                .collect();
+            if missing.is_empty() {
+                return;
+            }
+            if Instant::now() >= deadline {
+                eprintln!(
+                    "planner: no publisher yet on {} after {timeout:?}; connecting on first receive",
+                    missing.join(", ")
+                );
+                return;
+            }
+            std::thread::sleep(Duration::from_millis(10));
+        }
     }
 
     /// One LBV cycle; `Ok(false)` when the session is over.
@@ -458,14 +596,25 @@ impl PlannerHost {
         }
 
         // Chassis goals: rounds computed on the low-priority pool.
-        let mut step = Step::Wait;
-        if let Some(done) = self.pool.try_recv() {
-            self.job_ns = self.clock.now_ns().saturating_sub(self.submitted_ns);
-            let out = done
+        let mut step = None;
+        while let Some(done) = self.pool.try_recv() {
+            match done
                 .result
-                .map_err(|p| anyhow::anyhow!("planning job panicked: {}", p.0))?;
-            step = self.planner.job_done(out, t);
-        } else if self.pending.is_none() && self.pool.outstanding() == 0 {
+                .map_err(|p| anyhow::anyhow!("planning job panicked: {}", p.0))?
+            {
+                Work::Round(out) => {
+                    self.job_ns = self.clock.now_ns().saturating_sub(self.submitted_ns);
+                    self.job_outstanding = false;
+                    step = Some(self.planner.job_done(out, t));
+                }
+                Work::Load(buffer) => {
+                    if let Some(l) = self.load.as_mut() {
+                        l.done(buffer);
+                    }
+                }
+            }
+        }
+        if step.is_none() && self.pending.is_none() && !self.job_outstanding {
             let nav: &OccupancyGrid = self.nav.as_deref().unwrap_or(&self.empty_grid);
             let explore: &OccupancyGrid = self.explore.as_deref().unwrap_or(&self.empty_grid);
             let inputs = PlannerInputs {
@@ -474,14 +623,26 @@ impl PlannerHost {
                 nav,
                 explore,
             };
-            step = self.planner.next_goal(&inputs, t);
+            step = Some(self.planner.next_goal(&inputs, t));
         }
-        let go_on = self.handle(step, t)?;
+        // A load job never takes the last slot, so a planning job always finds room.
+        if let Some(l) = self.load.as_mut()
+            && self.pool.outstanding() + 1 < self.pool.capacity()
+            && let Some(work) = l.next(map)
+            && self.pool.try_submit(work).is_err()
+        {
+            bail!("worker pool refused a load job although it had room");
+        }
+        let go_on = self.handle(step.unwrap_or(Step::Wait), t)?;
         if let Some(job) = self.pending.take() {
-            // Only submitted when nothing is outstanding, so the pool has room.
             self.submitted_ns = self.clock.now_ns();
-            if self.pool.try_submit(move || job.run()).is_err() {
-                bail!("worker pool refused a planning job although none was outstanding");
+            match self.pool.try_submit(move || Work::Round(job.run())) {
+                Ok(_) => self.job_outstanding = true,
+                Err(_) => bail!(
+                    "worker pool refused a planning job with {} of {} slots taken",
+                    self.pool.outstanding(),
+                    self.pool.capacity()
+                ),
             }
         }
         self.forward_events()?;
@@ -503,6 +664,12 @@ impl PlannerHost {
             }
             Step::Finished(summary) => {
                 eprintln!("planner: {summary}");
+                if let Some(l) = &self.load {
+                    eprintln!(
+                        "planner: GBV load: {} jobs of {} candidates evaluated",
+                        l.jobs, l.candidates
+                    );
+                }
                 self.publish_gbv_decision(t, Some(summary.status.code()))?;
                 return Ok(false);
             }
