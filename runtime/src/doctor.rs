@@ -63,6 +63,11 @@ pub struct Report {
     pub sched_idle: Probe,
     /// Nice −5 on a scratch thread (the executor's fallback when FIFO is refused).
     pub negative_nice: Probe,
+    /// Opening `/dev/cpu_dma_latency` for writing (the executor's `cpu_dma_latency_us`).
+    pub cpu_latency: Probe,
+    /// The kernel's preemption model (`PREEMPT_NONE` kernels delay even FIFO wake-ups behind
+    /// long kernel work), from `/sys/kernel/debug/sched/preempt` or `uname -v`.
+    pub preemption: String,
     /// `CLOCK_MONOTONIC` resolution, ns.
     pub clock_resolution_ns: Result<u64, String>,
     /// CPUs this process may use.
@@ -135,6 +140,29 @@ impl Report {
         let affinity = on_scratch_thread(move || Probe::from(crate::os::set_affinity(&[first])));
         let sched_idle = on_scratch_thread(|| Probe::from(crate::os::set_idle()));
         let negative_nice = on_scratch_thread(|| Probe::from(crate::os::set_nice(-5)));
+        let cpu_latency = Probe::from(
+            std::fs::OpenOptions::new()
+                .write(true)
+                .open("/dev/cpu_dma_latency")
+                .map(drop),
+        );
+        let preemption = read_trim("/sys/kernel/debug/sched/preempt")
+            .map(|m| format!("{m} (dynamic; the active mode is in parentheses)"))
+            .or_else(|| {
+                read_trim("/proc/sys/kernel/version").map(|v| {
+                    let model = ["PREEMPT_RT", "PREEMPT_DYNAMIC", "PREEMPT"]
+                        .into_iter()
+                        .find(|m| v.contains(m))
+                        .unwrap_or("none or voluntary");
+                    let note = if model == "PREEMPT_DYNAMIC" {
+                        "; active mode unknown (/sys/kernel/debug/sched/preempt unreadable)"
+                    } else {
+                        ""
+                    };
+                    format!("{model}{note}")
+                })
+            })
+            .unwrap_or_else(|| "unknown".into());
         let uid = status
             .lines()
             .find(|l| l.starts_with("Uid:"))
@@ -167,6 +195,8 @@ impl Report {
             affinity,
             sched_idle,
             negative_nice,
+            cpu_latency,
+            preemption,
             clock_resolution_ns: crate::os::monotonic_resolution_ns().map_err(|e| e.to_string()),
             cpus: std::thread::available_parallelism().map_or(cpu_list.len(), |n| n.get()),
             cpu_list,
@@ -221,6 +251,12 @@ impl fmt::Display for Report {
         writeln!(f, "CPU affinity:       {}", self.affinity)?;
         writeln!(f, "SCHED_IDLE:         {}", self.sched_idle)?;
         writeln!(f, "negative nice:      {}", self.negative_nice)?;
+        writeln!(
+            f,
+            "CPU latency limit:  {} (/dev/cpu_dma_latency)",
+            self.cpu_latency
+        )?;
+        writeln!(f, "preemption:         {}", self.preemption)?;
         match &self.clock_resolution_ns {
             Ok(ns) => writeln!(f, "clock resolution:   {ns} ns (CLOCK_MONOTONIC)")?,
             Err(e) => writeln!(f, "clock resolution:   unknown ({e})")?,

@@ -94,6 +94,9 @@ pub struct ExecutorConfig {
     pub cpus: Vec<usize>,
     /// Sleep until this long before each release, then spin (µs); 0 = pure sleep.
     pub spin_margin_us: u64,
+    /// While the process runs, hold `/dev/cpu_dma_latency` at this many µs (no deep idle
+    /// states; cyclictest does the same by default); -1 = leave the system's setting.
+    pub cpu_dma_latency_us: i32,
     /// Budget as a fraction of the period, (0, 1]: a cycle misses if it ends after release+budget.
     pub budget_fraction: f64,
     /// Policy after a miss.
@@ -117,6 +120,7 @@ impl Default for ExecutorConfig {
             mlockall: true,
             cpus: Vec::new(),
             spin_margin_us: 200,
+            cpu_dma_latency_us: 0,
             budget_fraction: 1.0,
             miss_policy: MissPolicy::Skip,
             escalate_after: 5,
@@ -155,6 +159,12 @@ impl ExecutorConfig {
             "executor.spin_margin_us",
             self.spin_margin_us,
             "must be in [0, 100000]",
+        )?;
+        c.require(
+            (-1..=10_000_000).contains(&self.cpu_dma_latency_us),
+            "executor.cpu_dma_latency_us",
+            self.cpu_dma_latency_us,
+            "must be in [-1, 10000000] (-1 = leave the system setting)",
         )?;
         c.require(
             self.budget_fraction.is_finite()
@@ -214,6 +224,8 @@ pub struct SchedReport {
     pub mlocked: bool,
     /// The CPUs the thread is pinned to, if pinning was requested and granted.
     pub cpus: Option<Vec<usize>>,
+    /// The CPU wake-up latency limit the process holds, µs, if one was requested and granted.
+    pub cpu_dma_latency_us: Option<i32>,
     /// One line per refused request (empty if everything was granted).
     pub refusals: Vec<String>,
 }
@@ -226,9 +238,13 @@ impl fmt::Display for SchedReport {
         }
         write!(f, ", mlock {}", if self.mlocked { "yes" } else { "no" })?;
         match &self.cpus {
-            Some(c) => write!(f, ", cpus {c:?}"),
-            None => write!(f, ", cpus any"),
+            Some(c) => write!(f, ", cpus {c:?}")?,
+            None => write!(f, ", cpus any")?,
         }
+        if let Some(us) = self.cpu_dma_latency_us {
+            write!(f, ", cpu latency {us} µs")?;
+        }
+        Ok(())
     }
 }
 
@@ -250,7 +266,22 @@ fn mlock_process() -> Result<(), String> {
         .clone()
 }
 
-/// Apply `cfg`'s affinity, policy and memory locking to the calling thread; never fails.
+/// Process-wide `/dev/cpu_dma_latency` hold, attempted once (the first value requested wins);
+/// the file is kept open for the life of the process.
+fn hold_cpu_latency(us: i32) -> Result<i32, String> {
+    static HELD: OnceLock<Result<(std::fs::File, i32), String>> = OnceLock::new();
+    HELD.get_or_init(|| {
+        crate::os::hold_cpu_dma_latency(us)
+            .map(|f| (f, us))
+            .map_err(|e| e.to_string())
+    })
+    .as_ref()
+    .map(|(_, held)| *held)
+    .map_err(Clone::clone)
+}
+
+/// Apply `cfg`'s affinity, policy, memory locking and CPU latency limit to the calling thread;
+/// never fails.
 pub fn apply_sched(thread: &str, cfg: &ExecutorConfig) -> SchedReport {
     let mut refusals = Vec::new();
     let mut refuse = |kind: &str, msg: String| {
@@ -300,11 +331,25 @@ pub fn apply_sched(thread: &str, cfg: &ExecutorConfig) -> SchedReport {
             Err(e) => refuse("mlockall", format!("mlockall refused ({e})")),
         }
     }
+    let mut cpu_dma_latency_us = None;
+    if cfg.cpu_dma_latency_us >= 0 {
+        match hold_cpu_latency(cfg.cpu_dma_latency_us) {
+            Ok(us) => cpu_dma_latency_us = Some(us),
+            Err(e) => refuse(
+                "cpu_dma_latency",
+                format!(
+                    "CPU latency limit {} µs refused (/dev/cpu_dma_latency: {e})",
+                    cfg.cpu_dma_latency_us
+                ),
+            ),
+        }
+    }
     SchedReport {
         fifo,
         nice: crate::os::nice().unwrap_or(0),
         mlocked,
         cpus,
+        cpu_dma_latency_us,
         refusals,
     }
 }

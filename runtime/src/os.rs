@@ -103,6 +103,18 @@ pub fn munlockall() -> io::Result<()> {
     check(unsafe { libc::munlockall() })
 }
 
+/// Ask the kernel to keep every CPU's wake-up latency at most `us` µs (power management may
+/// not use deeper idle states) for as long as the returned file stays open, as cyclictest does.
+/// On a VM with the `haltpoll` idle driver, 0 makes idle vCPUs poll instead of halting.
+pub fn hold_cpu_dma_latency(us: i32) -> io::Result<std::fs::File> {
+    use std::io::Write;
+    let mut f = std::fs::OpenOptions::new()
+        .write(true)
+        .open("/dev/cpu_dma_latency")?;
+    f.write_all(&us.to_ne_bytes())?;
+    Ok(f)
+}
+
 /// Pin the calling thread to `cpus` (indices). EINVAL if none of them exists.
 pub fn set_affinity(cpus: &[usize]) -> io::Result<()> {
     // SAFETY: an all-zero `cpu_set_t` is the empty set (it is a plain bit array).

@@ -376,3 +376,39 @@ fn stop_request_ends_a_real_clock_executor() {
     assert_eq!(s.reason, StopReason::Requested);
     assert!(s.monitor.cycles() >= 3);
 }
+
+#[test]
+fn cpu_latency_limit_is_held_while_the_process_runs_or_the_refusal_is_reported() {
+    let cfg = ExecutorConfig {
+        policy: SchedPolicy::Other,
+        nice: 0,
+        cpu_dma_latency_us: 0,
+        ..ExecutorConfig::default()
+    };
+    let report = runtime::executor::apply_sched("latency-test", &cfg);
+    match report.cpu_dma_latency_us {
+        Some(us) => {
+            assert_eq!(us, 0);
+            // The kernel reports the effective (lowest requested) limit.
+            let bytes = std::fs::read("/dev/cpu_dma_latency").unwrap();
+            let held = i32::from_ne_bytes(bytes[..4].try_into().unwrap());
+            assert_eq!(held, 0, "the limit is not in force");
+            assert!(report.to_string().contains("cpu latency 0 µs"), "{report}");
+        }
+        None => assert!(
+            report
+                .refusals
+                .iter()
+                .any(|r| r.contains("/dev/cpu_dma_latency")),
+            "neither held nor refused: {report:?}"
+        ),
+    }
+    let off = ExecutorConfig {
+        cpu_dma_latency_us: -1,
+        ..cfg
+    };
+    assert_eq!(
+        runtime::executor::apply_sched("latency-off", &off).cpu_dma_latency_us,
+        None
+    );
+}
