@@ -174,6 +174,9 @@ pub struct RunConfig {
     pub max_restarts: u32,
     /// Grace period for nodes to exit after SIGINT before SIGKILL, seconds.
     pub stop_grace_s: f64,
+    /// `SCHED_FIFO` priority of the mapper's thread (below the LBV's `executor.priority`, so
+    /// depth frames become maps promptly under CPU load); 0 = `SCHED_OTHER`.
+    pub mapper_priority: i32,
 }
 
 impl Default for RunConfig {
@@ -185,6 +188,7 @@ impl Default for RunConfig {
             max_sim_s: 330.0,
             max_restarts: 2,
             stop_grace_s: 5.0,
+            mapper_priority: 70,
         }
     }
 }
@@ -206,6 +210,12 @@ impl RunConfig {
         )?;
         c.in_range("run.max_sim_s", self.max_sim_s, 1.0, 86_400.0)?;
         c.count("run.max_restarts", self.max_restarts as usize, 0, 100)?;
+        c.require(
+            (0..=98).contains(&self.mapper_priority),
+            "run.mapper_priority",
+            self.mapper_priority,
+            "must be in [0, 98] (0 = SCHED_OTHER)",
+        )?;
         c.in_range("run.stop_grace_s", self.stop_grace_s, 0.1, 600.0)
     }
 }

@@ -1,7 +1,9 @@
 //! `e2e`: latencies of a live `vpsom run` pipeline, from the message headers.
 //!
-//! frame → map = `map.header.stamp_ns − map.last_frame_stamp_ns`; frame → LBV =
-//! `neck_goal.header.stamp_ns − neck_goal.frame_stamp_ns`; LBV execution time and misses from
+//! frame → map = `map.header.stamp_ns − map.last_frame_stamp_ns` at the first map that includes
+//! the frame; frame → LBV = `neck_goal.header.stamp_ns − neck_goal.frame_stamp_ns` at the first
+//! neck goal computed from such a map (each frame counted once; the same difference at every
+//! neck goal is reported as the frame's age at the LBV); LBV execution time and misses from
 //! the `deadline` topic (events whose thread name contains "lbv", or all events if none does);
 //! GBV round time = `eval_ns` of GBV planner decisions. `--fake` runs this binary's own
 //! `fake-pipeline` (same topics, realistic stamps, a real executor for the LBV) instead.
@@ -81,7 +83,59 @@ fn vpsom_path(e: &E2eSettings) -> Result<PathBuf> {
     }
 }
 
-/// Run the pipeline (or the fake) and measure.
+/// Samples gathered over one or more pipeline sessions.
+#[derive(Default)]
+struct Samples {
+    frame_map: Vec<u64>,
+    frame_lbv: Vec<u64>,
+    /// Age of the newest frame in the map each LBV cycle used (every neck goal).
+    lbv_age: Vec<u64>,
+    gbv: Vec<u64>,
+    exec: BTreeMap<String, Vec<u64>>,
+    misses: BTreeMap<String, u64>,
+    neck_seen: u64,
+    decisions_seen: [u64; 2],
+    lost: u64,
+    /// Measured time, summed over sessions.
+    measured: Duration,
+    /// Sessions run, and how many ended on their own (the planner finished).
+    sessions: u32,
+    sessions_finished: u32,
+}
+
+/// The command for session `k` (0-based) and its printable form.
+fn pipeline_command(
+    e: &E2eSettings,
+    fake: bool,
+    ns: &str,
+    dir: &Path,
+    k: u32,
+) -> Result<(Command, String)> {
+    if fake {
+        let mut c = Command::new(std::env::current_exe()?);
+        c.args(["fake-pipeline", "--ns", ns]);
+        return Ok((c, format!("vpsom-rt-tests fake-pipeline --ns {ns}")));
+    }
+    let exe = vpsom_path(e)?;
+    let out = if k == 0 {
+        dir.join("run")
+    } else {
+        dir.join(format!("run-{}", k + 1))
+    };
+    let mut c = Command::new(&exe);
+    c.args(["run", "--ns", ns, "--time-scale", &e.time_scale.to_string()])
+        .arg("--out")
+        .arg(&out)
+        .args(&e.run_args);
+    let line = format!("{c:?}");
+    Ok((c, line))
+}
+
+/// Run the pipeline (or the fake) and measure. A `vpsom run` session ends when its planner
+/// finishes; if that happens before `duration_s` of measurement, the next session is started
+/// (fresh namespace, `run-2`, `run-3`, … output directories) and measurement goes on, so the
+/// figures always cover `duration_s` of pipeline operation. Each session's first `warmup_s`
+/// (start-up) is not measured.
 pub fn run(
     e: &E2eSettings,
     fake: bool,
@@ -89,7 +143,6 @@ pub fn run(
     dir: &Path,
     log: &mut SampleLog,
 ) -> Result<Outcome> {
-    let ns = format!("rtt-e2e-{}", std::process::id());
     let ports = if fake || e.pipeline_config.is_empty() {
         PortsConfig::default()
     } else {
@@ -97,139 +150,35 @@ pub fn run(
             .with_context(|| format!("load {}", e.pipeline_config))?
             .ports
     };
-    let (cmd, cmdline) = if fake {
-        let mut c = Command::new(std::env::current_exe()?);
-        c.args(["fake-pipeline", "--ns", &ns]);
-        (c, format!("vpsom-rt-tests fake-pipeline --ns {ns}"))
-    } else {
-        let exe = vpsom_path(e)?;
-        let out = dir.join("run");
-        let mut c = Command::new(&exe);
-        c.args([
-            "run",
-            "--ns",
-            &ns,
-            "--time-scale",
-            &e.time_scale.to_string(),
-        ])
-        .arg("--out")
-        .arg(&out)
-        .args(&e.run_args);
-        let line = format!("{c:?}");
-        (c, line)
-    };
-    let mut cmd = cmd;
-    let child = cmd
-        .stdin(Stdio::null())
-        .spawn()
-        .with_context(|| format!("start {cmdline}"))?;
-    let mut pipeline = Pipeline(child);
-    // Open the pipeline's services rather than create them with our settings (per-topic
-    // overrides of the run's config, e.g. a larger buffer, must win).
-    let wanted = ["map", "neck/goal", "planner/decision", "deadline"];
-    let t_wait = Instant::now();
-    loop {
-        let have = runtime::ports::list_services(&ns)?;
-        let exists = |t: &str| {
-            let a = format!("vpsom/{ns}/{t}");
-            let b = format!("vpsom/{ns}/{}", t.replace('/', "_"));
-            have.iter().any(|h| *h == a || *h == b)
-        };
-        if wanted.iter().all(|t| exists(t)) {
+    let duration = Duration::from_secs_f64(e.duration_s);
+    let mut acc = Samples::default();
+    let mut cmdline = String::new();
+    let mut ns = String::new();
+    while acc.measured < duration {
+        ns = format!("rtt-e2e-{}-{}", std::process::id(), acc.sessions + 1);
+        let (cmd, line) = pipeline_command(e, fake, &ns, dir, acc.sessions)?;
+        cmdline = line;
+        let ended = session(e, &ports, cmd, &cmdline, &ns, duration, &mut acc, log)?;
+        acc.sessions += 1;
+        acc.sessions_finished += u32::from(ended);
+        if !ended {
             break;
         }
-        if let Some(status) = pipeline.0.try_wait()? {
-            bail!("the pipeline ({cmdline}) exited early: {status}");
-        }
-        if crate::interrupted() {
-            bail!("interrupted");
-        }
-        if t_wait.elapsed() > Duration::from_secs(60) {
-            let missing: Vec<&str> = wanted.iter().copied().filter(|t| !exists(t)).collect();
-            bail!("the pipeline did not create {missing:?} in namespace {ns} within 60 s");
-        }
-        std::thread::sleep(Duration::from_millis(50));
     }
-    let ctx = PortContext::with_namespace(&ports, "rtt-e2e", &ns)?;
-    let map = ctx.subscriber::<ObjectMap>("map")?;
-    let neck = subscriber::<NeckGoal>(&ctx, "neck/goal")?;
-    let dec = subscriber::<PlannerDecision>(&ctx, "planner/decision")?;
-    let dl = ctx.subscriber::<DeadlineEvent>("deadline")?;
-    let clock = MonotonicClock::new();
-    let t0 = Instant::now();
-    let warm = Duration::from_secs_f64(e.warmup_s);
-    let end = warm + Duration::from_secs_f64(e.duration_s);
-    let mut frame_map = Vec::new();
-    let mut frame_lbv = Vec::new();
-    let mut gbv = Vec::new();
-    let mut exec: BTreeMap<String, Vec<u64>> = BTreeMap::new();
-    let mut misses: BTreeMap<String, u64> = BTreeMap::new();
-    let mut neck_seen = 0u64;
-    let mut decisions_seen = [0u64; 2];
-    while t0.elapsed() < end {
-        if crate::interrupted() {
-            bail!("interrupted");
-        }
-        if let Some(status) = pipeline.0.try_wait()? {
-            bail!("the pipeline ({cmdline}) exited early: {status}");
-        }
-        let measuring = t0.elapsed() >= warm;
-        let now = clock.now_ns();
-        while let Some(m) = map.receive()? {
-            if measuring && m.last_frame_stamp_ns > 0 {
-                let l = m.header.stamp_ns.saturating_sub(m.last_frame_stamp_ns);
-                frame_map.push(l);
-                log.record(
-                    "/e2e/frame_to_map",
-                    now,
-                    &json!({"seq": m.header.seq, "latency_ns": l}),
-                )?;
-            }
-        }
-        while let Some(g) = neck.receive()? {
-            if measuring {
-                neck_seen += 1;
-            }
-            if measuring && g.frame_stamp_ns > 0 {
-                let l = g.header.stamp_ns.saturating_sub(g.frame_stamp_ns);
-                frame_lbv.push(l);
-                log.record(
-                    "/e2e/frame_to_lbv",
-                    now,
-                    &json!({"seq": g.header.seq, "latency_ns": l}),
-                )?;
-            }
-        }
-        while let Some(d) = dec.receive()? {
-            if measuring {
-                decisions_seen[usize::from(d.kind.min(1))] += 1;
-            }
-            if measuring && d.kind == decision_kind::GBV {
-                gbv.push(d.eval_ns);
-                log.record(
-                    "/e2e/gbv_round",
-                    now,
-                    &json!({"seq": d.header.seq, "eval_ns": d.eval_ns}),
-                )?;
-            }
-        }
-        while let Some(ev) = dl.receive()? {
-            if measuring {
-                let name = ev.thread_name().to_string();
-                exec.entry(name.clone()).or_default().push(ev.exec_ns);
-                *misses.entry(name.clone()).or_default() += ev.missed as u64;
-                log.record(
-                    &format!("/e2e/deadline/{name}"),
-                    now,
-                    &json!({"cycle": ev.cycle, "lateness_ns": ev.lateness_ns, "exec_ns": ev.exec_ns, "missed": ev.missed}),
-                )?;
-            }
-        }
-        std::thread::sleep(Duration::from_millis(2));
-    }
-    let lost = map.gaps() + neck.gaps() + dl.gaps();
-    drop((map, neck, dec, dl, ctx));
-    drop(pipeline);
+    let Samples {
+        frame_map,
+        frame_lbv,
+        lbv_age,
+        gbv,
+        exec,
+        misses,
+        neck_seen,
+        decisions_seen,
+        lost,
+        measured,
+        sessions,
+        sessions_finished,
+    } = acc;
     let lbv_names: Vec<String> = exec.keys().filter(|k| k.contains("lbv")).cloned().collect();
     let lbv_names = if lbv_names.is_empty() {
         exec.keys().cloned().collect()
@@ -243,16 +192,21 @@ pub fn run(
     let lbv_misses: u64 = lbv_names.iter().map(|n| misses[n]).sum();
     let p_map = Percentiles::of_samples(&frame_map);
     let p_lbv = Percentiles::of_samples(&frame_lbv);
+    let p_age = Percentiles::of_samples(&lbv_age);
     let p_exec = Percentiles::of_samples(&lbv_exec);
     let p_gbv = Percentiles::of_samples(&gbv);
     let mut md = format!(
-        "# vpsom-rt-tests e2e\n\nPipeline: `{cmdline}` (namespace `{ns}`), warm-up {} s, measured {} s. \
-         Latencies from message headers.\n\n",
-        e.warmup_s, e.duration_s
+        "# vpsom-rt-tests e2e\n\nPipeline: `{cmdline}` (namespace `{ns}`). {sessions} session(s) \
+         ({sessions_finished} ended by the planner and were followed by a new one), each with \
+         {} s of start-up unmeasured; measured {:.1} s in all. Latencies from message headers; \
+         each frame counted once, at the first map and the first neck goal that include it.\n\n",
+        e.warmup_s,
+        measured.as_secs_f64()
     );
     md += &table_header(&["measurement"]);
     md += &table_row(&["frame → map".into()], &p_map);
     md += &table_row(&["frame → LBV (neck goal)".into()], &p_lbv);
+    md += &table_row(&["newest frame's age at each LBV".into()], &p_age);
     md += &table_row(
         &[format!("LBV execution ({})", lbv_names.join(", "))],
         &p_exec,
@@ -320,13 +274,159 @@ pub fn run(
         markdown: md,
         json: json!({
             "settings": e, "fake": fake, "pipeline": cmdline, "namespace": ns,
-            "frame_to_map": p_map, "frame_to_lbv": p_lbv, "lbv_exec": p_exec,
+            "sessions": sessions, "sessions_ended_by_planner": sessions_finished,
+            "measured_s": measured.as_secs_f64(),
+            "frame_to_map": p_map, "frame_to_lbv": p_lbv, "lbv_frame_age": p_age, "lbv_exec": p_exec,
             "lbv_threads": lbv_names, "lbv_deadline_misses": lbv_misses, "gbv_round": p_gbv,
             "harness_lost": lost,
         }),
         checks,
         errors,
     })
+}
+
+/// One pipeline session: start it, measure until the total measured time reaches `duration`
+/// (then stop it: `Ok(false)`) or the pipeline ends with success (`Ok(true)`). A pipeline that
+/// fails is an error.
+#[allow(clippy::too_many_arguments)]
+fn session(
+    e: &E2eSettings,
+    ports: &PortsConfig,
+    mut cmd: Command,
+    cmdline: &str,
+    ns: &str,
+    duration: Duration,
+    acc: &mut Samples,
+    log: &mut SampleLog,
+) -> Result<bool> {
+    let child = cmd
+        .stdin(Stdio::null())
+        .spawn()
+        .with_context(|| format!("start {cmdline}"))?;
+    let mut pipeline = Pipeline(child);
+    // Open the pipeline's services rather than create them with our settings (per-topic
+    // overrides of the run's config, e.g. a larger buffer, must win).
+    let wanted = ["map", "neck/goal", "planner/decision", "deadline"];
+    let t_wait = Instant::now();
+    loop {
+        let have = runtime::ports::list_services(ns)?;
+        let exists = |t: &str| {
+            let a = format!("vpsom/{ns}/{t}");
+            let b = format!("vpsom/{ns}/{}", t.replace('/', "_"));
+            have.iter().any(|h| *h == a || *h == b)
+        };
+        if wanted.iter().all(|t| exists(t)) {
+            break;
+        }
+        if let Some(status) = pipeline.0.try_wait()? {
+            bail!("the pipeline ({cmdline}) exited early: {status}");
+        }
+        if crate::interrupted() {
+            bail!("interrupted");
+        }
+        if t_wait.elapsed() > Duration::from_secs(60) {
+            let missing: Vec<&str> = wanted.iter().copied().filter(|t| !exists(t)).collect();
+            bail!("the pipeline did not create {missing:?} in namespace {ns} within 60 s");
+        }
+        std::thread::sleep(Duration::from_millis(50));
+    }
+    let ctx = PortContext::with_namespace(ports, "rtt-e2e", ns)?;
+    let map = ctx.subscriber::<ObjectMap>("map")?;
+    let neck = subscriber::<NeckGoal>(&ctx, "neck/goal")?;
+    let dec = subscriber::<PlannerDecision>(&ctx, "planner/decision")?;
+    let dl = ctx.subscriber::<DeadlineEvent>("deadline")?;
+    let clock = MonotonicClock::new();
+    let t0 = Instant::now();
+    let warm = Duration::from_secs_f64(e.warmup_s);
+    let before = acc.measured;
+    let mut ended = false;
+    // A frame is measured once: at the first map that includes it, and at the first neck goal
+    // computed from such a map. (Maps republished without a new frame, e.g. while localization
+    // is lost, would otherwise count the wait for the next frame as latency.)
+    let (mut map_frame, mut lbv_frame) = (0u64, 0u64);
+    loop {
+        let measured = t0.elapsed().saturating_sub(warm);
+        acc.measured = before + measured;
+        if acc.measured >= duration {
+            break;
+        }
+        if crate::interrupted() {
+            bail!("interrupted");
+        }
+        let measuring = measured > Duration::ZERO;
+        let now = clock.now_ns();
+        while let Some(m) = map.receive()? {
+            let new_frame = m.last_frame_stamp_ns > map_frame;
+            map_frame = map_frame.max(m.last_frame_stamp_ns);
+            if measuring && new_frame {
+                let l = m.header.stamp_ns.saturating_sub(m.last_frame_stamp_ns);
+                acc.frame_map.push(l);
+                log.record(
+                    "/e2e/frame_to_map",
+                    now,
+                    &json!({"seq": m.header.seq, "latency_ns": l}),
+                )?;
+            }
+        }
+        while let Some(g) = neck.receive()? {
+            if measuring {
+                acc.neck_seen += 1;
+            }
+            let new_frame = g.frame_stamp_ns > lbv_frame;
+            lbv_frame = lbv_frame.max(g.frame_stamp_ns);
+            if measuring && g.frame_stamp_ns > 0 {
+                let l = g.header.stamp_ns.saturating_sub(g.frame_stamp_ns);
+                acc.lbv_age.push(l);
+            }
+            if measuring && new_frame {
+                let l = g.header.stamp_ns.saturating_sub(g.frame_stamp_ns);
+                acc.frame_lbv.push(l);
+                log.record(
+                    "/e2e/frame_to_lbv",
+                    now,
+                    &json!({"seq": g.header.seq, "latency_ns": l}),
+                )?;
+            }
+        }
+        while let Some(d) = dec.receive()? {
+            if measuring {
+                acc.decisions_seen[usize::from(d.kind.min(1))] += 1;
+            }
+            if measuring && d.kind == decision_kind::GBV && d.eval_ns > 0 {
+                acc.gbv.push(d.eval_ns);
+                log.record(
+                    "/e2e/gbv_round",
+                    now,
+                    &json!({"seq": d.header.seq, "eval_ns": d.eval_ns}),
+                )?;
+            }
+        }
+        while let Some(ev) = dl.receive()? {
+            if measuring {
+                let name = ev.thread_name().to_string();
+                acc.exec.entry(name.clone()).or_default().push(ev.exec_ns);
+                *acc.misses.entry(name.clone()).or_default() += ev.missed as u64;
+                log.record(
+                    &format!("/e2e/deadline/{name}"),
+                    now,
+                    &json!({"cycle": ev.cycle, "lateness_ns": ev.lateness_ns, "exec_ns": ev.exec_ns, "missed": ev.missed}),
+                )?;
+            }
+        }
+        // Checked after draining, so the samples a finished session left behind are counted.
+        if let Some(status) = pipeline.0.try_wait()? {
+            if !status.success() {
+                bail!("the pipeline ({cmdline}) failed: {status}");
+            }
+            ended = true;
+            break;
+        }
+        std::thread::sleep(Duration::from_millis(2));
+    }
+    acc.lost += map.gaps() + neck.gaps() + dl.gaps();
+    drop((map, neck, dec, dl, ctx));
+    drop(pipeline);
+    Ok(ended)
 }
 
 /// The hidden `fake-pipeline` subcommand: depth at 30 Hz, a "mapper" publishing the map 8 ms

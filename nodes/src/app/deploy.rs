@@ -235,6 +235,19 @@ pub fn sim_node(args: &RunArgs, cfg: &Config) -> anyhow::Result<()> {
 /// exploration grid, both written in place into loaned samples.
 pub fn mapper_node(args: &RunArgs, cfg: &Config) -> anyhow::Result<()> {
     let stop = stop_flag()?;
+    let sched = runtime::executor::apply_sched(
+        "mapper",
+        &runtime::executor::ExecutorConfig {
+            policy: if cfg.run.mapper_priority > 0 {
+                runtime::executor::SchedPolicy::Fifo
+            } else {
+                runtime::executor::SchedPolicy::Other
+            },
+            priority: cfg.run.mapper_priority.max(1),
+            ..cfg.executor.clone()
+        },
+    );
+    eprintln!("mapper: {sched}");
     let clock = MonotonicClock::new();
     let ctx = PortContext::with_namespace(&cfg.ports, "mapper", &args.namespace)?;
     let depth = ctx.subscriber::<DepthFrame>(topics::DEPTH)?;
@@ -457,7 +470,7 @@ struct PlannerHost {
     load: Option<GbvLoad>,
     /// When the job in the pool was submitted (for the GBV round time), clock ns.
     submitted_ns: u64,
-    /// Duration of the newest finished job, ns.
+    /// Duration of the newest finished job (submission to result), ns.
     job_ns: u64,
     map_sub: Subscriber<ObjectMap>,
     state_sub: Subscriber<RobotState>,
@@ -691,7 +704,13 @@ impl PlannerHost {
                 src.evaluated,
                 src.cluster_id,
                 src.map_seq,
-                src.eval_ns,
+                // The round time on the pool (submission to result), unless the planner
+                // timed its own evaluation.
+                if src.eval_ns > 0 {
+                    src.eval_ns
+                } else {
+                    self.job_ns
+                },
             );
         }
         d.kind = decision_kind::GBV;
