@@ -133,16 +133,16 @@ enum TraceCmd {
         /// MCAP file.
         file: PathBuf,
     },
-    /// Export a JSON channel as CSV to stdout.
+    /// Export a JSON channel as CSV (one column per field, plus log_time_ns).
     Export {
         /// MCAP file.
         file: PathBuf,
         /// Topic, e.g. /runtime/deadline.
         #[arg(long)]
         topic: String,
-        /// CSV output (the only format).
-        #[arg(long, required = true)]
-        csv: bool,
+        /// CSV file to write (default: stdout).
+        #[arg(long, short)]
+        out: Option<PathBuf>,
     },
 }
 
@@ -391,13 +391,19 @@ fn trace(cmd: TraceCmd) -> anyhow::Result<ExitCode> {
     use runtime::recorder::inspect;
     match cmd {
         TraceCmd::Info { file } => println!("{}", inspect::info(&file)?),
-        TraceCmd::Export {
-            file,
-            topic,
-            csv: _,
-        } => {
-            let mut out = std::io::stdout().lock();
-            let rows = inspect::export_csv(&file, &topic, &mut out)?;
+        TraceCmd::Export { file, topic, out } => {
+            let rows = match &out {
+                Some(path) => {
+                    let f = std::fs::File::create(path)
+                        .with_context(|| format!("creating {}", path.display()))?;
+                    let mut w = std::io::BufWriter::new(f);
+                    let rows = inspect::export_csv(&file, &topic, &mut w)?;
+                    std::io::Write::flush(&mut w)
+                        .with_context(|| format!("writing {}", path.display()))?;
+                    rows
+                }
+                None => inspect::export_csv(&file, &topic, &mut std::io::stdout().lock())?,
+            };
             eprintln!("{rows} rows");
         }
     }

@@ -397,7 +397,10 @@ pub fn export_csv(path: &Path, topic: &str, out: &mut dyn Write) -> Result<u64, 
             encoding: e,
             ..
         } => {
-            topics.push(t.to_string());
+            // Channels are listed in the data and again in the summary section.
+            if !topics.iter().any(|x| x == t) {
+                topics.push(t.to_string());
+            }
             if t == topic {
                 ids.push(id);
                 encoding = Some(e.to_string());
@@ -422,7 +425,6 @@ pub fn export_csv(path: &Path, topic: &str, out: &mut dyn Write) -> Result<u64, 
     })?;
     match encoding.as_deref() {
         None => {
-            topics.dedup();
             return Err(read_err(
                 path,
                 format!("no topic {topic}; topics: {}", topics.join(", ")),
