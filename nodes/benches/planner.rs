@@ -18,6 +18,7 @@ use nodes::config::CameraConfig;
 use nodes::planner::clusters::{SideTracker, clusters, unfinished_centroid};
 use nodes::planner::gbv::{GbvJob, GbvParams, evaluate_poses, ring_poses};
 use nodes::planner::lbv::neck_yaws;
+use nodes::planner::reach::NavParams;
 use nodes::planner::synth::scene3_map;
 use nodes::planner::{EvalParams, Lbv, PlannerConfig, Target, Weights};
 use shm_types::{OccupancyGrid, boxed_zeroed, grid_cell};
@@ -63,8 +64,12 @@ fn gbv_params(n: usize) -> GbvParams {
         },
         candidates: n,
         safe_distance: 0.6,
-        robot_radius: 0.3,
-        nav_unknown_traversable: true,
+        nav: NavParams {
+            robot_radius: 0.3,
+            inflated: false,
+            unknown_traversable: true,
+        },
+        revisit_radius: 0.5,
         sectors: 8,
     }
 }
@@ -139,6 +144,7 @@ fn bench_gbv(c: &mut Criterion) {
                     nav: g,
                     base: BASE,
                     clusters: vec![desk],
+                    visited: Vec::new(),
                     params: p,
                 }
             },

@@ -9,6 +9,7 @@ use nodes::config::CameraConfig;
 use nodes::geom::{Camera, CameraMount};
 use nodes::planner::clusters::cluster_info;
 use nodes::planner::gbv::{GbvJob, GbvParams};
+use nodes::planner::reach::NavParams;
 use nodes::planner::synth::add_object;
 use nodes::planner::{
     EvalParams, PlannerConfig, PlannerInputs, PlannerKind, PlannerStatus, Step, Weights,
@@ -343,8 +344,12 @@ fn gbv_params() -> GbvParams {
         },
         candidates: 36,
         safe_distance: 0.6,
-        robot_radius: 0.3,
-        nav_unknown_traversable: true,
+        nav: NavParams {
+            robot_radius: 0.3,
+            inflated: false,
+            unknown_traversable: true,
+        },
+        revisit_radius: 0.5,
         sectors: 8,
     }
 }
@@ -362,6 +367,7 @@ fn gbv_prefers_the_high_entropy_side_and_drops_blocked_candidates() {
             nav: boxed_zeroed(),
             base: [-2.0, 0.0, 0.0],
             clusters: vec![info],
+            visited: Vec::new(),
             params: gbv_params(),
         };
         let r = job.run();
@@ -392,6 +398,7 @@ fn gbv_prefers_the_high_entropy_side_and_drops_blocked_candidates() {
         nav,
         base: [-2.0, 0.0, 0.0],
         clusters: vec![info],
+        visited: Vec::new(),
         params: gbv_params(),
     }
     .run();
@@ -399,4 +406,65 @@ fn gbv_prefers_the_high_entropy_side_and_drops_blocked_candidates() {
     assert!(best.pose[0] < 0.7, "{best:?}");
     assert!(r.decision.evaluated < 36);
     assert!(r.decision.candidates().iter().any(|c| c.dropped == 1));
+}
+
+/// The next GBV goal of `planner` on `map` for a robot in `state` (jobs run inline).
+fn next_gbv(
+    planner: &mut dyn nodes::planner::ViewPlanner,
+    map: &ObjectMap,
+    state: &RobotState,
+) -> NavGoal {
+    let (nav, explore) = (
+        boxed_zeroed::<OccupancyGrid>(),
+        boxed_zeroed::<OccupancyGrid>(),
+    );
+    let inputs = PlannerInputs {
+        map,
+        state,
+        nav: &nav,
+        explore: &explore,
+    };
+    match planner.next_goal(&inputs, 0) {
+        Step::Compute(job) => match planner.job_done(job.run(), 0) {
+            Step::Goal(g) => g,
+            other => panic!("expected a goal, got {other:?}"),
+        },
+        other => panic!("expected a GBV job, got {other:?}"),
+    }
+}
+
+/// Regression (paper-scene-2): when the map does not change, the best view stays the best; a
+/// round that chose the view the robot already stands at was reached at once and the cluster's
+/// rounds ran out within a fraction of a second. Every round must go somewhere new.
+#[test]
+fn gbv_rounds_do_not_return_to_a_view_already_taken() {
+    let mut cfg = PlannerConfig::default();
+    cfg.gbv.revisit_radius = 0.5;
+    let mut planner = make_planner(&cfg, &CameraConfig::default());
+    let map = one_cup_map([1.0, 0.0]);
+    let mut state = RobotState {
+        base_pose: [-2.0, 0.0, 0.0],
+        ..Default::default()
+    };
+    let mut taken: Vec<NavGoal> = Vec::new();
+    for _ in 0..4 {
+        let g = next_gbv(planner.as_mut(), &map, &state);
+        for t in &taken {
+            let d = (g.pose[0] - t.pose[0]).hypot(g.pose[1] - t.pose[1]);
+            assert!(
+                d >= 0.5 - 1e-3,
+                "goal {} at {:?} is {d:.2} m from goal {} at {:?}",
+                g.goal_id,
+                g.pose,
+                t.goal_id,
+                t.pose
+            );
+        }
+        // The base gets there; nothing new is mapped.
+        state.base_pose = g.pose;
+        state.nav_goal_id = g.goal_id;
+        state.nav_status = nav_status::REACHED;
+        taken.push(g);
+    }
+    assert_eq!(planner.summary().rounds, 4);
 }

@@ -15,6 +15,7 @@ use crate::planner::clusters::{self, ClusterInfo, SideTracker};
 use crate::planner::config::{PlannerConfig, PlannerKind};
 use crate::planner::coverage::{CoverageJob, CoverageParams};
 use crate::planner::frontier::{FrontierJob, FrontierParams};
+use crate::planner::reach::NavParams;
 use crate::planner::session::{
     Buffers, Goals, JobOutput, LookAround, Outcome, PlannerInputs, PlannerJob, PlannerStatus, Step,
     Summary, ViewPlanner, map_counts,
@@ -70,8 +71,7 @@ impl CoveragePlanner {
             params: CoverageParams {
                 waypoints: cfg.coverage.waypoints,
                 safe_distance: cfg.gbv.safe_distance,
-                robot_radius: cfg.robot_radius,
-                nav_unknown_traversable: cfg.nav_unknown_traversable,
+                nav: NavParams::new(cfg),
             },
             frontier: frontier_params(cfg),
             mount: camera.mount,

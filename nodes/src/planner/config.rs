@@ -140,6 +140,9 @@ pub struct GbvConfig {
     pub safe_distance: f32,
     /// GBV rounds spent on one cluster before it is given up (guarantees termination).
     pub max_rounds_per_cluster: u32,
+    /// Candidates of a cluster within this distance of one of its earlier GBV goals (reached or
+    /// refused) are dropped, so that every round moves the base to a new view, metres.
+    pub revisit_radius: f32,
 }
 
 impl Default for GbvConfig {
@@ -150,6 +153,7 @@ impl Default for GbvConfig {
             beta: 0.2,
             safe_distance: 0.6,
             max_rounds_per_cluster: 12,
+            revisit_radius: 0.5,
         }
     }
 }
@@ -265,6 +269,10 @@ pub struct PlannerConfig {
     pub robot_radius: f32,
     /// Whether UNKNOWN cells of the navigation grid may be driven through.
     pub nav_unknown_traversable: bool,
+    /// Whether the navigation grid's obstacles are already inflated by the robot radius (a
+    /// configuration-space map, as the simulator's pre-built map is); if false the planner
+    /// inflates them by `robot_radius` itself.
+    pub nav_inflated: bool,
     /// Global best view.
     pub gbv: GbvConfig,
     /// Local best view.
@@ -291,6 +299,7 @@ impl Default for PlannerConfig {
             occluders: Occluders::All,
             robot_radius: 0.3,
             nav_unknown_traversable: true,
+            nav_inflated: true,
             gbv: GbvConfig::default(),
             lbv: LbvConfig::default(),
             bootstrap: BootstrapConfig::default(),
@@ -336,6 +345,12 @@ impl PlannerConfig {
             g.max_rounds_per_cluster as usize,
             1,
             10_000,
+        )?;
+        c.in_range(
+            "planner.gbv.revisit_radius",
+            g.revisit_radius.into(),
+            0.0,
+            10.0,
         )?;
         let l = &self.lbv;
         c.count("planner.lbv.candidates", l.candidates, 1, 100_000)?;

@@ -7,7 +7,7 @@
 //! skipped; a cluster without any reachable waypoint is skipped as a whole.
 
 use crate::planner::clusters::ClusterInfo;
-use crate::planner::reach::NavMap;
+use crate::planner::reach::NavParams;
 use shm_types::OccupancyGrid;
 use std::f32::consts::{FRAC_PI_2, TAU};
 
@@ -18,10 +18,8 @@ pub struct CoverageParams {
     pub waypoints: usize,
     /// Ring clearance, metres.
     pub safe_distance: f32,
-    /// Robot radius, metres.
-    pub robot_radius: f32,
-    /// Whether UNKNOWN navigation cells are traversable.
-    pub nav_unknown_traversable: bool,
+    /// Reading of the navigation grid.
+    pub nav: NavParams,
 }
 
 /// The circle around a cluster: `[x, y, yaw]` waypoints, closed (first == last position).
@@ -66,8 +64,7 @@ impl CoverageJob {
     /// Run the planning.
     pub fn run(self) -> CoverageResult {
         let p = self.params;
-        let mut nav = NavMap::new(&self.nav, p.robot_radius, p.nav_unknown_traversable);
-        nav.flood_from([self.base[0], self.base[1]], p.robot_radius);
+        let nav = p.nav.flooded(&self.nav, [self.base[0], self.base[1]]);
         let mut unreachable = Vec::new();
         let mut found = None;
         for info in &self.clusters {
@@ -110,8 +107,11 @@ mod tests {
         let p = CoverageParams {
             waypoints: 4,
             safe_distance: 0.5,
-            robot_radius: 0.3,
-            nav_unknown_traversable: true,
+            nav: NavParams {
+                robot_radius: 0.3,
+                inflated: false,
+                unknown_traversable: true,
+            },
         };
         let c = circle(&info, &p, [-3.0, 0.0]);
         assert_eq!(c.len(), 5);

@@ -9,7 +9,7 @@
 //!
 //! Used by the frontier baseline and by VP-SOM/coverage to explore before any cluster is known.
 
-use crate::planner::reach::NavMap;
+use crate::planner::reach::{NavMap, NavParams};
 use shm_types::{OccupancyGrid, grid_cell};
 
 /// Parameters of frontier selection.
@@ -19,10 +19,8 @@ pub struct FrontierParams {
     pub min_cells: usize,
     /// Blacklist radius around earlier goals, metres.
     pub blacklist_radius: f32,
-    /// Robot radius, metres.
-    pub robot_radius: f32,
-    /// Whether UNKNOWN navigation cells are traversable.
-    pub nav_unknown_traversable: bool,
+    /// Reading of the navigation grid.
+    pub nav: NavParams,
 }
 
 /// A frontier cluster.
@@ -191,8 +189,7 @@ impl FrontierJob {
     pub fn run(self) -> FrontierResult {
         let p = self.params;
         let fronts = frontiers(&self.explore, &self.blacklist, &p);
-        let mut nav = NavMap::new(&self.nav, p.robot_radius, p.nav_unknown_traversable);
-        nav.flood_from([self.base[0], self.base[1]], p.robot_radius);
+        let nav = p.nav.flooded(&self.nav, [self.base[0], self.base[1]]);
         let goal = choose(&self.explore, &fronts, &nav, self.base);
         FrontierResult {
             goal,
@@ -212,8 +209,11 @@ mod tests {
         FrontierParams {
             min_cells: 3,
             blacklist_radius: 0.5,
-            robot_radius: 0.2,
-            nav_unknown_traversable: true,
+            nav: NavParams {
+                robot_radius: 0.2,
+                inflated: false,
+                unknown_traversable: true,
+            },
         }
     }
 

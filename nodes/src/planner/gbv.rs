@@ -5,10 +5,14 @@
 //! (neck yaw 0, the mount's pitch), so the camera's line of sight goes to the centre. Poses in
 //! collision or unreachable on the inflated navigation grid are dropped; the rest are evaluated
 //! in parallel (rayon, on whatever pool runs the job) with α = 1, β = 0.2 and the tracked
-//! cluster as the f_c target. For a cluster without any foreground object yet (f_a is 0 there),
-//! candidates in sectors it was already seen from are dropped too, so that successive rounds
-//! look at it from new sides (see [`crate::planner::clusters`]). If every candidate of a cluster
-//! is dropped, the next unfinished cluster is tried within the same round. The best candidate
+//! cluster as the f_c target. Candidates within `revisit_radius` of one of the cluster's earlier
+//! GBV goals are dropped, so that every round moves the base to a view it has not had (without
+//! this, a view that keeps the highest F(v) is chosen again where the robot already stands, the
+//! goal is reached at once and the cluster's rounds run out within a fraction of a second). For a
+//! cluster without any foreground object yet (f_a is 0 there), candidates in sectors it was
+//! already seen from are dropped too, so that successive rounds look at it from new sides (see
+//! [`crate::planner::clusters`]). If every candidate of a cluster is dropped, the next unfinished
+//! cluster is tried within the same round. The best candidate
 //! becomes the [`NavGoal`](shm_types::NavGoal).
 //!
 //! [`GbvJob`] owns copies of its inputs (`Send + 'static`) so a host can run it on a
@@ -16,7 +20,7 @@
 
 use crate::planner::clusters::{ClusterInfo, unfinished_centroid};
 use crate::planner::evaluate::{EvalParams, Target, Weights, evaluate_view};
-use crate::planner::reach::NavMap;
+use crate::planner::reach::NavParams;
 use rayon::prelude::*;
 use shm_types::{
     Candidate, MAX_CANDIDATES, ObjectMap, OccupancyGrid, PlannerDecision, boxed_zeroed,
@@ -35,10 +39,10 @@ pub struct GbvParams {
     pub candidates: usize,
     /// Clearance between the cluster's footprint and the ring, metres.
     pub safe_distance: f32,
-    /// Robot radius for inflation, metres.
-    pub robot_radius: f32,
-    /// Whether UNKNOWN navigation cells are traversable.
-    pub nav_unknown_traversable: bool,
+    /// Reading of the navigation grid.
+    pub nav: NavParams,
+    /// Candidates this close to an earlier goal of their cluster are dropped, metres.
+    pub revisit_radius: f32,
     /// Angular sectors around a cluster (`bootstrap.sectors`).
     pub sectors: usize,
 }
@@ -104,6 +108,8 @@ pub struct GbvJob {
     pub base: [f32; 3],
     /// Unfinished clusters in processing order; the first with a reachable candidate is served.
     pub clusters: Vec<ClusterInfo>,
+    /// Earlier GBV goals: cluster id and base position.
+    pub visited: Vec<(i32, [f32; 2])>,
     /// Parameters.
     pub params: GbvParams,
 }
@@ -127,8 +133,8 @@ impl GbvJob {
     /// Run the round (uses rayon's current pool for the candidates).
     pub fn run(self) -> GbvResult {
         let p = self.params;
-        let mut nav = NavMap::new(&self.nav, p.robot_radius, p.nav_unknown_traversable);
-        nav.flood_from([self.base[0], self.base[1]], p.robot_radius);
+        let nav = p.nav.flooded(&self.nav, [self.base[0], self.base[1]]);
+        let r2 = p.revisit_radius * p.revisit_radius;
         let mut decision = boxed_zeroed::<PlannerDecision>();
         decision.kind = decision_kind::GBV;
         decision.map_seq = self.map.header.seq;
@@ -152,9 +158,14 @@ impl GbvJob {
                 let s = ((a / TAU * sectors as f32) as usize) % sectors;
                 info.sides_seen & (1u64 << s) == 0
             };
+            let new = |b: &[f32; 3]| {
+                !self.visited.iter().any(|(id, v)| {
+                    *id == info.id && (b[0] - v[0]).powi(2) + (b[1] - v[1]).powi(2) < r2
+                })
+            };
             let (ok, dropped): (Vec<[f32; 3]>, Vec<[f32; 3]>) = poses
                 .iter()
-                .partition(|b| fresh(b) && nav.reachable([b[0], b[1]]));
+                .partition(|b| fresh(b) && new(b) && nav.reachable([b[0], b[1]]));
             if ok.is_empty() {
                 unreachable.push(info.id);
                 continue;

@@ -1,12 +1,17 @@
 //! Reachability and collision on the navigation grid (obstacles only).
 //!
-//! Obstacles (cells with a value ≥ 50 other than UNKNOWN; UNKNOWN too unless
-//! `nav_unknown_traversable`) are inflated by the robot radius; a pose is in collision when its
-//! cell is inflated; a pose is reachable when a path of free 8-connected cells leads to it from
-//! the robot's cell (Dijkstra with step costs 1 and √2, giving path lengths). The robot may
-//! start inside the inflated band (e.g. after odometry drift): cells within the robot radius of
-//! the start that are not obstacles themselves are traversable. An empty grid (width or height
-//! 0) means "no obstacle information": everything is reachable at straight-line distance.
+//! Obstacles are cells with a value ≥ 50 other than UNKNOWN (UNKNOWN too unless
+//! `nav_unknown_traversable`). The grid may already be a configuration-space map whose obstacles
+//! are inflated by the robot radius (the simulator's pre-built map is: `planner.nav_inflated`);
+//! otherwise the planner inflates them by the robot radius itself ([`NavParams`]). Inflating an
+//! inflated map twice closes every corridor narrower than four robot radii that the base can in
+//! fact drive (in paper-scene-2 the passages around the second desk), so the two cases are kept
+//! apart. A pose is in collision when its cell is inflated; a pose is reachable when a path of
+//! free 8-connected cells leads to it from the robot's cell (Dijkstra with step costs 1 and √2,
+//! giving path lengths). The robot may start inside the inflated band (e.g. after odometry
+//! drift): cells within the robot radius of the start that are not obstacles themselves are
+//! traversable. An empty grid (width or height 0) means "no obstacle information": everything
+//! is reachable at straight-line distance.
 
 use shm_types::{OccupancyGrid, grid_cell};
 use std::cmp::Reverse;
@@ -18,6 +23,46 @@ pub fn is_obstacle(v: u8, unknown_is_obstacle: bool) -> bool {
         unknown_is_obstacle
     } else {
         v >= 50
+    }
+}
+
+/// How the planner reads the navigation grid.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct NavParams {
+    /// Robot footprint radius, metres: the escape radius around the start, and the inflation
+    /// when the grid is not inflated yet.
+    pub robot_radius: f32,
+    /// Whether the grid's obstacles are already inflated by the robot radius (then the planner
+    /// does not inflate them again).
+    pub inflated: bool,
+    /// Whether UNKNOWN cells are traversable.
+    pub unknown_traversable: bool,
+}
+
+impl NavParams {
+    /// From the `[planner]` configuration.
+    pub fn new(cfg: &crate::planner::config::PlannerConfig) -> Self {
+        Self {
+            robot_radius: cfg.robot_radius,
+            inflated: cfg.nav_inflated,
+            unknown_traversable: cfg.nav_unknown_traversable,
+        }
+    }
+
+    /// The radius the planner inflates obstacles by: 0 for an inflated grid, else the robot's.
+    pub fn inflation(&self) -> f32 {
+        if self.inflated {
+            0.0
+        } else {
+            self.robot_radius
+        }
+    }
+
+    /// The grid as these parameters read it, flooded from `start` (world xy).
+    pub fn flooded(&self, grid: &OccupancyGrid, start: [f32; 2]) -> NavMap {
+        let mut m = NavMap::new(grid, self.inflation(), self.unknown_traversable);
+        m.flood_from(start, self.robot_radius);
+        m
     }
 }
 
@@ -265,5 +310,26 @@ mod tests {
         assert!(!NavMap::new(&g, 0.0, true).in_collision([1.05, 1.05]));
         let empty = NavMap::new(&boxed_zeroed::<OccupancyGrid>(), 0.3, true);
         assert!(empty.reachable([100.0, 0.0]));
+    }
+
+    /// A configuration-space grid (obstacles already inflated by the robot radius) is used as
+    /// it is: a 0.5 m passage stays open (inflating it again by 0.3 m per side would close it).
+    #[test]
+    fn an_inflated_grid_is_not_inflated_again() {
+        let mut g = room(false);
+        for iy in 10..15 {
+            g.cells[iy * 40 + 20] = grid_cell::FREE; // a 0.5 m passage in the wall
+        }
+        let mut p = NavParams {
+            robot_radius: 0.3,
+            inflated: true,
+            unknown_traversable: true,
+        };
+        assert_eq!(p.inflation(), 0.0);
+        let m = p.flooded(&g, [1.0, 1.25]);
+        assert!(m.reachable([3.0, 1.25]) && !m.in_collision([2.05, 1.05]));
+        p.inflated = false;
+        let m = p.flooded(&g, [1.0, 1.25]);
+        assert!(!m.reachable([3.0, 1.25]) && m.in_collision([2.05, 1.05]));
     }
 }

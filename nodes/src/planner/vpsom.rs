@@ -9,8 +9,10 @@
 //!    is superseded by a GBV round. No cluster and no reachable frontier → `NoCandidates`.
 //! 3. **GBV**: for the first unfinished cluster by first sighting, a [`GbvJob`]; its best view is
 //!    published (kind GBV). When the base reports REACHED or UNREACHABLE for it, the next round
-//!    starts. A cluster gets at most `gbv.max_rounds_per_cluster` rounds (rounds in which it had
-//!    no reachable candidate count too); then it is given up.
+//!    starts. Each round's goal is remembered for its cluster: later rounds drop candidates within
+//!    `gbv.revisit_radius` of it (a view already taken, or refused, is not chosen again), so every
+//!    round moves the base somewhere new. A cluster gets at most `gbv.max_rounds_per_cluster`
+//!    rounds (rounds in which it had no reachable candidate count too); then it is given up.
 //!
 //! The LBV always tracks the cluster of the current GBV goal while it is unfinished, else the
 //! first unfinished cluster; with none, the neck looks around.
@@ -25,6 +27,7 @@ use crate::planner::evaluate::{EvalParams, Target, Weights};
 use crate::planner::frontier::{FrontierJob, FrontierParams};
 use crate::planner::gbv::{GbvJob, GbvParams};
 use crate::planner::lbv::Lbv;
+use crate::planner::reach::NavParams;
 use crate::planner::session::{
     Buffers, Goals, JobOutput, LookAround, Outcome, PlannerInputs, PlannerJob, PlannerStatus, Step,
     Summary, ViewPlanner, map_counts,
@@ -60,6 +63,7 @@ pub struct VpsomPlanner {
     rounds: Vec<(i32, u32)>,
     given_up: Vec<i32>,
     blacklist: Vec<[f32; 2]>,
+    visited: Vec<(i32, [f32; 2])>,
     decision: Option<Box<PlannerDecision>>,
     status: PlannerStatus,
     summary: Summary,
@@ -71,8 +75,7 @@ pub(crate) fn frontier_params(cfg: &PlannerConfig) -> FrontierParams {
     FrontierParams {
         min_cells: cfg.frontier.min_cells,
         blacklist_radius: cfg.frontier.blacklist_radius,
-        robot_radius: cfg.robot_radius,
-        nav_unknown_traversable: cfg.nav_unknown_traversable,
+        nav: NavParams::new(cfg),
     }
 }
 
@@ -88,8 +91,8 @@ impl VpsomPlanner {
             },
             candidates: cfg.gbv.candidates,
             safe_distance: cfg.gbv.safe_distance,
-            robot_radius: cfg.robot_radius,
-            nav_unknown_traversable: cfg.nav_unknown_traversable,
+            nav: NavParams::new(cfg),
+            revisit_radius: cfg.gbv.revisit_radius,
             sectors: cfg.bootstrap.sectors,
         };
         Self {
@@ -114,6 +117,7 @@ impl VpsomPlanner {
             rounds: Vec::with_capacity(shm_types::MAX_OBJECTS),
             given_up: Vec::with_capacity(shm_types::MAX_OBJECTS),
             blacklist: Vec::new(),
+            visited: Vec::new(),
             decision: None,
             status: PlannerStatus::Running,
             summary: Summary {
@@ -246,6 +250,7 @@ impl ViewPlanner for VpsomPlanner {
             nav: self.buffers.nav(inputs.nav),
             base: inputs.state.base_pose,
             clusters: open,
+            visited: self.visited.clone(),
             params: self.gbv,
         }))
     }
@@ -264,6 +269,7 @@ impl ViewPlanner for VpsomPlanner {
                     Some(b) => {
                         self.count_round(b.cluster_id);
                         self.tracked = Some(b.cluster_id);
+                        self.visited.push((b.cluster_id, [b.pose[0], b.pose[1]]));
                         Step::Goal(self.goals.issue(
                             b.pose,
                             b.score,
