@@ -401,19 +401,10 @@ struct GbvLoad {
 
 impl GbvLoad {
     fn new(cfg: &Config, candidates: usize) -> Self {
-        let p = &cfg.planner;
         Self {
             params: GbvParams {
-                eval: planner::EvalParams::new(p, &cfg.camera),
-                weights: planner::Weights {
-                    alpha: p.gbv.alpha,
-                    beta: p.gbv.beta,
-                },
                 candidates,
-                safe_distance: p.gbv.safe_distance,
-                robot_radius: p.robot_radius,
-                nav_unknown_traversable: p.nav_unknown_traversable,
-                sectors: p.bootstrap.sectors,
+                ..GbvParams::new(&cfg.planner, &cfg.camera)
             },
             candidates,
             spare: Some(boxed_zeroed()),

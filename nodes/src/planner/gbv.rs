@@ -47,6 +47,27 @@ pub struct GbvParams {
     pub sectors: usize,
 }
 
+impl GbvParams {
+    /// From the `[planner]` and `[camera]` configuration.
+    pub fn new(
+        cfg: &crate::planner::config::PlannerConfig,
+        camera: &crate::config::CameraConfig,
+    ) -> Self {
+        Self {
+            eval: EvalParams::new(cfg, camera),
+            weights: Weights {
+                alpha: cfg.gbv.alpha,
+                beta: cfg.gbv.beta,
+            },
+            candidates: cfg.gbv.candidates,
+            safe_distance: cfg.gbv.safe_distance,
+            nav: NavParams::new(cfg),
+            revisit_radius: cfg.gbv.revisit_radius,
+            sectors: cfg.bootstrap.sectors,
+        }
+    }
+}
+
 /// `N` base poses `[x, y, yaw]` evenly on the ring around a cluster, each facing its centre;
 /// the first is on the side of `from` (the robot), the rest follow counter-clockwise.
 pub fn ring_poses(

@@ -23,7 +23,7 @@ use crate::config::CameraConfig;
 use crate::geom::CameraMount;
 use crate::planner::clusters::{self, ClusterInfo, SideTracker};
 use crate::planner::config::{PlannerConfig, PlannerKind};
-use crate::planner::evaluate::{EvalParams, Target, Weights};
+use crate::planner::evaluate::{EvalParams, Target};
 use crate::planner::frontier::{FrontierJob, FrontierParams};
 use crate::planner::gbv::{GbvJob, GbvParams};
 use crate::planner::lbv::Lbv;
@@ -82,19 +82,8 @@ pub(crate) fn frontier_params(cfg: &PlannerConfig) -> FrontierParams {
 impl VpsomPlanner {
     /// A planner from the configuration.
     pub fn new(cfg: &PlannerConfig, camera: &CameraConfig) -> Self {
-        let eval = EvalParams::new(cfg, camera);
-        let gbv = GbvParams {
-            eval,
-            weights: Weights {
-                alpha: cfg.gbv.alpha,
-                beta: cfg.gbv.beta,
-            },
-            candidates: cfg.gbv.candidates,
-            safe_distance: cfg.gbv.safe_distance,
-            nav: NavParams::new(cfg),
-            revisit_radius: cfg.gbv.revisit_radius,
-            sectors: cfg.bootstrap.sectors,
-        };
+        let gbv = GbvParams::new(cfg, camera);
+        let eval = gbv.eval;
         Self {
             cfg: cfg.clone(),
             eval,
