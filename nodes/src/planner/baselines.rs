@@ -11,61 +11,37 @@
 
 use crate::config::CameraConfig;
 use crate::geom::{CameraMount, wrap_angle};
-use crate::planner::clusters::{self, ClusterInfo, SideTracker};
+use crate::planner::clusters::{self, ClusterInfo};
 use crate::planner::config::{PlannerConfig, PlannerKind};
 use crate::planner::coverage::{CoverageJob, CoverageParams};
-use crate::planner::frontier::{FrontierJob, FrontierParams};
 use crate::planner::reach::NavParams;
 use crate::planner::session::{
-    Buffers, Goals, JobOutput, LookAround, Outcome, PlannerInputs, PlannerJob, PlannerStatus, Step,
-    Summary, ViewPlanner, map_counts,
+    Back, JobOutput, LookAround, Outcome, PlannerInputs, PlannerJob, PlannerStatus, Session, Step,
+    Summary, ViewPlanner, neck_goal_for,
 };
-use crate::planner::vpsom::frontier_params;
 use shm_types::{NeckGoal, ObjectMap, RobotState, goal_kind};
 use std::collections::VecDeque;
-
-fn empty_summary(kind: PlannerKind) -> Summary {
-    Summary {
-        kind,
-        status: PlannerStatus::Running,
-        goals_issued: 0,
-        goals_unreachable: 0,
-        rounds: 0,
-        clusters: 0,
-        clusters_done: 0,
-        clusters_given_up: 0,
-        foreground: 0,
-        foreground_done: 0,
-        finished_ns: None,
-    }
-}
 
 /// All-views coverage baseline.
 #[derive(Debug)]
 pub struct CoveragePlanner {
     eps_sopm: f32,
     params: CoverageParams,
-    frontier: FrontierParams,
     mount: CameraMount,
-    goals: Goals,
-    buffers: Buffers,
+    session: Session,
     look: LookAround,
-    sides: SideTracker,
     queue: VecDeque<[f32; 3]>,
     current: Option<ClusterInfo>,
     circled: Vec<i32>,
-    given_up: Vec<i32>,
-    blacklist: Vec<[f32; 2]>,
     exploring: bool,
-    pending: bool,
-    status: PlannerStatus,
-    summary: Summary,
-    jobs: u64,
 }
 
 impl CoveragePlanner {
     /// A planner from the configuration.
     pub fn new(cfg: &PlannerConfig, camera: &CameraConfig) -> Self {
+        let mut session = Session::new(PlannerKind::Coverage, cfg, 0);
+        // "Done" means circled here.
+        session.clusters_done = Some(0);
         Self {
             eps_sopm: cfg.eps_sopm,
             params: CoverageParams {
@@ -73,42 +49,32 @@ impl CoveragePlanner {
                 safe_distance: cfg.gbv.safe_distance,
                 nav: NavParams::new(cfg),
             },
-            frontier: frontier_params(cfg),
             mount: camera.mount,
-            goals: Goals::new(),
-            buffers: Buffers::default(),
+            session,
             look: LookAround::new(
                 cfg.bootstrap.look_around_steps,
                 cfg.bootstrap.neck_tolerance_deg.to_radians(),
             ),
-            sides: SideTracker::new(cfg.bootstrap.sectors),
             queue: VecDeque::new(),
             current: None,
             circled: Vec::with_capacity(shm_types::MAX_OBJECTS),
-            given_up: Vec::with_capacity(shm_types::MAX_OBJECTS),
-            blacklist: Vec::new(),
             exploring: false,
-            pending: false,
-            status: PlannerStatus::Running,
-            summary: empty_summary(PlannerKind::Coverage),
-            jobs: 0,
         }
     }
 
     fn finish(&mut self, now_ns: u64) -> Step {
-        self.status = if self.given_up.is_empty() {
+        let status = if self.session.given_up.is_empty() {
             PlannerStatus::Terminated
         } else {
             PlannerStatus::NoCandidates
         };
-        self.summary.finished_ns = Some(now_ns);
-        Step::Finished(self.summary())
+        self.session.finish(status, now_ns)
     }
 
     fn next_waypoint(&mut self, now_ns: u64) -> Option<Step> {
         let w = self.queue.pop_front()?;
         let id = self.current.map_or(-1, |c| c.id);
-        Some(Step::Goal(self.goals.issue(
+        Some(Step::Goal(self.session.goals.issue(
             w,
             0.0,
             id,
@@ -124,15 +90,13 @@ impl ViewPlanner for CoveragePlanner {
     }
 
     fn next_goal(&mut self, inputs: &PlannerInputs<'_>, now_ns: u64) -> Step {
-        if self.status.is_finished() {
-            return Step::Finished(self.summary());
-        }
-        map_counts(inputs.map, self.eps_sopm, &self.sides, 0, &mut self.summary);
-        if self.pending {
-            return Step::Wait;
+        if let Some(step) = self.session.begin(inputs.map) {
+            return step;
         }
         let any_cluster = inputs.map.objects().iter().any(|o| o.is_background());
-        if self.goals.poll(inputs.state) == Outcome::Pending && !(self.exploring && any_cluster) {
+        if self.session.goals.poll(inputs.state) == Outcome::Pending
+            && !(self.exploring && any_cluster)
+        {
             return Step::Wait;
         }
         self.exploring = false;
@@ -141,88 +105,64 @@ impl ViewPlanner for CoveragePlanner {
         }
         if let Some(c) = self.current.take() {
             self.circled.push(c.id);
+            self.session.clusters_done = Some(self.circled.len() as u32);
         }
-        let all = clusters::clusters(inputs.map, self.eps_sopm, &self.sides, 0);
+        let all = clusters::clusters(inputs.map, self.eps_sopm, &self.session.sides, 0);
         if all.is_empty() {
             if !self.look.swept() {
                 return Step::Wait;
             }
             self.exploring = true;
-            self.pending = true;
-            self.jobs += 1;
-            return Step::Compute(PlannerJob::Frontier(FrontierJob {
-                explore: self.buffers.explore(inputs.explore),
-                nav: self.buffers.nav(inputs.nav),
-                base: inputs.state.base_pose,
-                blacklist: self.blacklist.clone(),
-                params: self.frontier,
-            }));
+            return self.session.frontier_job(inputs);
         }
+        let given_up = &self.session.given_up;
         let open: Vec<ClusterInfo> = all
             .into_iter()
-            .filter(|c| !self.circled.contains(&c.id) && !self.given_up.contains(&c.id))
+            .filter(|c| !self.circled.contains(&c.id) && !given_up.contains(&c.id))
             .collect();
         if open.is_empty() {
             return self.finish(now_ns);
         }
-        self.pending = true;
-        self.jobs += 1;
-        Step::Compute(PlannerJob::Coverage(CoverageJob {
-            nav: self.buffers.nav(inputs.nav),
+        let job = CoverageJob {
+            nav: self.session.buffers.nav(inputs.nav),
             base: inputs.state.base_pose,
             clusters: open,
             params: self.params,
-        }))
+        };
+        self.session.compute(PlannerJob::Coverage(job))
     }
 
     fn job_done(&mut self, output: JobOutput, now_ns: u64) -> Step {
-        self.pending = false;
-        match output {
-            JobOutput::Coverage(r) => {
-                self.buffers.put_nav(r.nav);
-                self.given_up.extend(r.unreachable);
-                match r.circle {
-                    Some((info, wps)) => {
-                        self.current = Some(info);
-                        self.queue = wps.into();
-                        self.next_waypoint(now_ns).unwrap_or(Step::Wait)
-                    }
-                    None => self.finish(now_ns),
-                }
+        let r = match self
+            .session
+            .job_back(output, now_ns, PlannerStatus::NoCandidates)
+        {
+            Back::Coverage(r) => r,
+            other => return self.session.discard(other),
+        };
+        self.session.buffers.put_nav(r.nav);
+        self.session.given_up.extend(r.unreachable);
+        match r.circle {
+            Some((info, wps)) => {
+                self.current = Some(info);
+                self.queue = wps.into();
+                self.next_waypoint(now_ns).unwrap_or(Step::Wait)
             }
-            JobOutput::Frontier(r) => {
-                self.buffers.put_explore(r.explore);
-                self.buffers.put_nav(r.nav);
-                match r.goal {
-                    Some((pose, _)) => {
-                        self.blacklist.push([pose[0], pose[1]]);
-                        Step::Goal(self.goals.issue(pose, 0.0, -1, goal_kind::FRONTIER, now_ns))
-                    }
-                    None => {
-                        self.status = PlannerStatus::NoCandidates;
-                        self.summary.finished_ns = Some(now_ns);
-                        Step::Finished(self.summary())
-                    }
-                }
-            }
-            JobOutput::Gbv(r) => {
-                self.buffers.put_map(r.map);
-                self.buffers.put_nav(r.nav);
-                Step::Wait
-            }
+            None => self.finish(now_ns),
         }
     }
 
     fn neck_goal(&mut self, map: &ObjectMap, state: &RobotState, _now_ns: u64) -> NeckGoal {
-        let mut goal = NeckGoal {
-            map_seq: map.header.seq,
-            frame_stamp_ns: map.last_frame_stamp_ns,
-            pitch: self.mount.pitch(),
-            ..Default::default()
-        };
+        let mut goal = neck_goal_for(map, self.mount.pitch());
         let centre = self.current.map(|c| c.center).or_else(|| {
-            clusters::first_unfinished(map, self.eps_sopm, &self.sides, usize::MAX, &self.circled)
-                .map(|c| c.center)
+            clusters::first_unfinished(
+                map,
+                self.eps_sopm,
+                &self.session.sides,
+                usize::MAX,
+                &self.circled,
+            )
+            .map(|c| c.center)
         });
         goal.yaw = match centre {
             Some(c) => {
@@ -236,53 +176,27 @@ impl ViewPlanner for CoveragePlanner {
     }
 
     fn status(&self) -> PlannerStatus {
-        self.status
+        self.session.status()
     }
 
     fn summary(&self) -> Summary {
-        Summary {
-            status: self.status,
-            goals_issued: self.goals.issued,
-            goals_unreachable: self.goals.unreachable,
-            rounds: self.jobs,
-            clusters_done: self.circled.len() as u32,
-            clusters_given_up: self.given_up.len() as u32,
-            ..self.summary
-        }
+        self.session.summary()
     }
 }
 
 /// Frontier-exploration baseline.
 #[derive(Debug)]
 pub struct FrontierPlanner {
-    eps_sopm: f32,
-    params: FrontierParams,
     mount: CameraMount,
-    goals: Goals,
-    buffers: Buffers,
-    sides: SideTracker,
-    blacklist: Vec<[f32; 2]>,
-    pending: bool,
-    status: PlannerStatus,
-    summary: Summary,
-    jobs: u64,
+    session: Session,
 }
 
 impl FrontierPlanner {
     /// A planner from the configuration.
     pub fn new(cfg: &PlannerConfig, camera: &CameraConfig) -> Self {
         Self {
-            eps_sopm: cfg.eps_sopm,
-            params: frontier_params(cfg),
             mount: camera.mount,
-            goals: Goals::new(),
-            buffers: Buffers::default(),
-            sides: SideTracker::new(cfg.bootstrap.sectors),
-            blacklist: Vec::new(),
-            pending: false,
-            status: PlannerStatus::Running,
-            summary: empty_summary(PlannerKind::Frontier),
-            jobs: 0,
+            session: Session::new(PlannerKind::Frontier, cfg, 0),
         }
     }
 }
@@ -293,75 +207,31 @@ impl ViewPlanner for FrontierPlanner {
     }
 
     fn next_goal(&mut self, inputs: &PlannerInputs<'_>, _now_ns: u64) -> Step {
-        if self.status.is_finished() {
-            return Step::Finished(self.summary());
+        if let Some(step) = self.session.begin(inputs.map) {
+            return step;
         }
-        map_counts(inputs.map, self.eps_sopm, &self.sides, 0, &mut self.summary);
-        if self.pending || self.goals.poll(inputs.state) == Outcome::Pending {
+        if self.session.goals.poll(inputs.state) == Outcome::Pending {
             return Step::Wait;
         }
-        self.pending = true;
-        self.jobs += 1;
-        Step::Compute(PlannerJob::Frontier(FrontierJob {
-            explore: self.buffers.explore(inputs.explore),
-            nav: self.buffers.nav(inputs.nav),
-            base: inputs.state.base_pose,
-            blacklist: self.blacklist.clone(),
-            params: self.params,
-        }))
+        self.session.frontier_job(inputs)
     }
 
     fn job_done(&mut self, output: JobOutput, now_ns: u64) -> Step {
-        self.pending = false;
-        match output {
-            JobOutput::Frontier(r) => {
-                self.buffers.put_explore(r.explore);
-                self.buffers.put_nav(r.nav);
-                match r.goal {
-                    Some((pose, _)) => {
-                        self.blacklist.push([pose[0], pose[1]]);
-                        Step::Goal(self.goals.issue(pose, 0.0, -1, goal_kind::FRONTIER, now_ns))
-                    }
-                    None => {
-                        self.status = PlannerStatus::Terminated;
-                        self.summary.finished_ns = Some(now_ns);
-                        Step::Finished(self.summary())
-                    }
-                }
-            }
-            JobOutput::Gbv(r) => {
-                self.buffers.put_map(r.map);
-                self.buffers.put_nav(r.nav);
-                Step::Wait
-            }
-            JobOutput::Coverage(r) => {
-                self.buffers.put_nav(r.nav);
-                Step::Wait
-            }
-        }
+        let back = self
+            .session
+            .job_back(output, now_ns, PlannerStatus::Terminated);
+        self.session.discard(back)
     }
 
     fn neck_goal(&mut self, map: &ObjectMap, _state: &RobotState, _now_ns: u64) -> NeckGoal {
-        NeckGoal {
-            map_seq: map.header.seq,
-            frame_stamp_ns: map.last_frame_stamp_ns,
-            yaw: 0.0,
-            pitch: self.mount.pitch(),
-            ..Default::default()
-        }
+        neck_goal_for(map, self.mount.pitch())
     }
 
     fn status(&self) -> PlannerStatus {
-        self.status
+        self.session.status()
     }
 
     fn summary(&self) -> Summary {
-        Summary {
-            status: self.status,
-            goals_issued: self.goals.issued,
-            goals_unreachable: self.goals.unreachable,
-            rounds: self.jobs,
-            ..self.summary
-        }
+        self.session.summary()
     }
 }

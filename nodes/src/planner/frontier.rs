@@ -23,6 +23,17 @@ pub struct FrontierParams {
     pub nav: NavParams,
 }
 
+impl FrontierParams {
+    /// From the `[planner]` configuration.
+    pub fn new(cfg: &crate::planner::config::PlannerConfig) -> Self {
+        Self {
+            min_cells: cfg.frontier.min_cells,
+            blacklist_radius: cfg.frontier.blacklist_radius,
+            nav: NavParams::new(cfg),
+        }
+    }
+}
+
 /// A frontier cluster.
 #[derive(Debug, Clone, PartialEq)]
 pub struct Frontier {

@@ -1,15 +1,15 @@
 //! The planner interface shared by VP-SOM and the baselines: inputs, steps, jobs, status and
-//! summary, plus the bookkeeping every planner needs (goal ids, reusable snapshot buffers, the
-//! bootstrap look-around).
+//! summary, plus the bookkeeping every planner needs (`Session`: status, goal ids, the job in
+//! flight, reusable snapshot buffers, frontier exploration; the bootstrap look-around).
 
 use crate::planner::clusters::{self, SideTracker};
-use crate::planner::config::PlannerKind;
+use crate::planner::config::{PlannerConfig, PlannerKind};
 use crate::planner::coverage::{CoverageJob, CoverageResult};
-use crate::planner::frontier::{FrontierJob, FrontierResult};
+use crate::planner::frontier::{FrontierJob, FrontierParams, FrontierResult};
 use crate::planner::gbv::{GbvJob, GbvResult};
 use shm_types::{
     NavGoal, NeckGoal, ObjectMap, OccupancyGrid, PlannerDecision, RobotState, boxed_zeroed,
-    nav_status, planner_state,
+    goal_kind, nav_status, planner_state,
 };
 use std::fmt;
 
@@ -362,20 +362,185 @@ impl LookAround {
     }
 }
 
-/// Cluster and object counts of a map for the summary.
-pub(crate) fn map_counts(
-    map: &ObjectMap,
+/// The bookkeeping every planner shares: status and summary, goal ids, the planning job in
+/// flight, recycled snapshot buffers, the sides tracker and frontier exploration (VP-SOM's and
+/// coverage's bootstrap, the frontier baseline's only mode). Each planner keeps only its own
+/// logic on top.
+#[derive(Debug)]
+pub(crate) struct Session {
     eps_sopm: f32,
-    sides: &SideTracker,
     min_sides: usize,
-    s: &mut Summary,
-) {
-    let cl = clusters::clusters(map, eps_sopm, sides, min_sides);
-    s.clusters = cl.len() as u32;
-    s.clusters_done = cl.iter().filter(|c| c.done).count() as u32;
-    let fg = map.objects().iter().filter(|o| !o.is_background());
-    s.foreground = fg.clone().count() as u32;
-    s.foreground_done = fg.filter(|o| clusters::fg_done(o, eps_sopm)).count() as u32;
+    frontier: FrontierParams,
+    /// Goal ids and counts.
+    pub(crate) goals: Goals,
+    /// Snapshot buffers.
+    pub(crate) buffers: Buffers,
+    /// Sides each cluster was seen from (fed by planners that track it).
+    pub(crate) sides: SideTracker,
+    /// Clusters given up.
+    pub(crate) given_up: Vec<i32>,
+    /// Overrides the map-derived `clusters_done` (coverage: clusters circled).
+    pub(crate) clusters_done: Option<u32>,
+    blacklist: Vec<[f32; 2]>,
+    pending: bool,
+    status: PlannerStatus,
+    summary: Summary,
+    jobs: u64,
+}
+
+impl Session {
+    /// A running session of planner `kind`; `min_sides` is the "seen from enough sides" rule of
+    /// clusters without foreground objects (0: never done that way).
+    pub(crate) fn new(kind: PlannerKind, cfg: &PlannerConfig, min_sides: usize) -> Self {
+        Self {
+            eps_sopm: cfg.eps_sopm,
+            min_sides,
+            frontier: FrontierParams::new(cfg),
+            goals: Goals::new(),
+            buffers: Buffers::default(),
+            sides: SideTracker::new(cfg.bootstrap.sectors),
+            given_up: Vec::with_capacity(shm_types::MAX_OBJECTS),
+            clusters_done: None,
+            blacklist: Vec::new(),
+            pending: false,
+            status: PlannerStatus::Running,
+            summary: Summary {
+                kind,
+                status: PlannerStatus::Running,
+                goals_issued: 0,
+                goals_unreachable: 0,
+                rounds: 0,
+                clusters: 0,
+                clusters_done: 0,
+                clusters_given_up: 0,
+                foreground: 0,
+                foreground_done: 0,
+                finished_ns: None,
+            },
+            jobs: 0,
+        }
+    }
+
+    /// The start of every `next_goal`: takes the map's counts for the summary, and returns the
+    /// step to return at once (`Finished` once the session is over, `Wait` while a job is out).
+    pub(crate) fn begin(&mut self, map: &ObjectMap) -> Option<Step> {
+        if self.status.is_finished() {
+            return Some(Step::Finished(self.summary()));
+        }
+        let cl = clusters::clusters(map, self.eps_sopm, &self.sides, self.min_sides);
+        let s = &mut self.summary;
+        s.clusters = cl.len() as u32;
+        s.clusters_done = cl.iter().filter(|c| c.done).count() as u32;
+        let fg = map.objects().iter().filter(|o| !o.is_background());
+        s.foreground = fg.clone().count() as u32;
+        s.foreground_done = fg.filter(|o| clusters::fg_done(o, self.eps_sopm)).count() as u32;
+        self.pending.then_some(Step::Wait)
+    }
+
+    /// Hand a job to the host (one planning round).
+    pub(crate) fn compute(&mut self, job: PlannerJob) -> Step {
+        self.pending = true;
+        self.jobs += 1;
+        Step::Compute(job)
+    }
+
+    /// A frontier round on the exploration grid (earlier frontier goals blacklisted).
+    pub(crate) fn frontier_job(&mut self, inputs: &PlannerInputs<'_>) -> Step {
+        let job = FrontierJob {
+            explore: self.buffers.explore(inputs.explore),
+            nav: self.buffers.nav(inputs.nav),
+            base: inputs.state.base_pose,
+            blacklist: self.blacklist.clone(),
+            params: self.frontier,
+        };
+        self.compute(PlannerJob::Frontier(job))
+    }
+
+    /// The start of every `job_done`: the job is back. A frontier round ends here: its goal is
+    /// issued, or, when no reachable frontier remains, the session ends with `no_frontier`.
+    /// GBV and coverage rounds go back to the planner.
+    pub(crate) fn job_back(
+        &mut self,
+        output: JobOutput,
+        now_ns: u64,
+        no_frontier: PlannerStatus,
+    ) -> Back {
+        self.pending = false;
+        match output {
+            JobOutput::Frontier(r) => {
+                self.buffers.put_explore(r.explore);
+                self.buffers.put_nav(r.nav);
+                Back::Step(match r.goal {
+                    Some((pose, _)) => {
+                        self.blacklist.push([pose[0], pose[1]]);
+                        Step::Goal(self.goals.issue(pose, 0.0, -1, goal_kind::FRONTIER, now_ns))
+                    }
+                    None => self.finish(no_frontier, now_ns),
+                })
+            }
+            JobOutput::Gbv(r) => Back::Gbv(r),
+            JobOutput::Coverage(r) => Back::Coverage(r),
+        }
+    }
+
+    /// Take back the buffers of an output the planner has no use for.
+    pub(crate) fn discard(&mut self, back: Back) -> Step {
+        match back {
+            Back::Step(s) => return s,
+            Back::Gbv(r) => {
+                self.buffers.put_map(r.map);
+                self.buffers.put_nav(r.nav);
+            }
+            Back::Coverage(r) => self.buffers.put_nav(r.nav),
+        }
+        Step::Wait
+    }
+
+    /// End the session.
+    pub(crate) fn finish(&mut self, status: PlannerStatus, now_ns: u64) -> Step {
+        self.status = status;
+        self.summary.finished_ns = Some(now_ns);
+        Step::Finished(self.summary())
+    }
+
+    /// Current status.
+    pub(crate) fn status(&self) -> PlannerStatus {
+        self.status
+    }
+
+    /// The summary so far.
+    pub(crate) fn summary(&self) -> Summary {
+        Summary {
+            status: self.status,
+            goals_issued: self.goals.issued,
+            goals_unreachable: self.goals.unreachable,
+            rounds: self.jobs,
+            clusters_done: self.clusters_done.unwrap_or(self.summary.clusters_done),
+            clusters_given_up: self.given_up.len() as u32,
+            ..self.summary
+        }
+    }
+}
+
+/// A job output back at its planner (see [`Session::job_back`]).
+#[derive(Debug)]
+pub(crate) enum Back {
+    /// What a frontier round led to: its goal, or the end of the session.
+    Step(Step),
+    /// A GBV round.
+    Gbv(GbvResult),
+    /// A coverage round.
+    Coverage(CoverageResult),
+}
+
+/// A neck goal for `map` with the mount's pitch (yaw 0, score 0).
+pub(crate) fn neck_goal_for(map: &ObjectMap, pitch: f32) -> NeckGoal {
+    NeckGoal {
+        map_seq: map.header.seq,
+        frame_stamp_ns: map.last_frame_stamp_ns,
+        pitch,
+        ..Default::default()
+    }
 }
 
 #[cfg(test)]
@@ -433,5 +598,39 @@ mod tests {
         assert_eq!(dst.count, 2);
         assert_eq!(dst.objects[1].h_sopm, 0.7);
         assert_eq!(dst.header.seq, 9);
+    }
+
+    #[test]
+    fn session_waits_on_its_job_and_ends_once() {
+        let cfg = PlannerConfig::default();
+        let mut s = Session::new(PlannerKind::Frontier, &cfg, 0);
+        let map = boxed_zeroed::<ObjectMap>();
+        let grid = boxed_zeroed::<OccupancyGrid>();
+        let state = RobotState::default();
+        let inputs = PlannerInputs {
+            map: &map,
+            state: &state,
+            nav: &grid,
+            explore: &grid,
+        };
+        assert!(s.begin(&map).is_none());
+        let Step::Compute(job) = s.frontier_job(&inputs) else {
+            panic!("a frontier job");
+        };
+        assert!(matches!(s.begin(&map), Some(Step::Wait)), "job out");
+        // An empty exploration grid has no frontier: the session ends with the given status.
+        let back = s.job_back(job.run(), 7, PlannerStatus::Terminated);
+        let Back::Step(Step::Finished(sum)) = back else {
+            panic!("finished");
+        };
+        assert_eq!(
+            (sum.status, sum.rounds, sum.finished_ns),
+            (PlannerStatus::Terminated, 1, Some(7))
+        );
+        assert!(matches!(s.begin(&map), Some(Step::Finished(_))));
+        assert!(
+            s.buffers.explore.is_some() && s.buffers.nav.is_some(),
+            "buffers reclaimed"
+        );
     }
 }

@@ -21,16 +21,14 @@
 
 use crate::config::CameraConfig;
 use crate::geom::CameraMount;
-use crate::planner::clusters::{self, ClusterInfo, SideTracker};
+use crate::planner::clusters::{self, ClusterInfo};
 use crate::planner::config::{PlannerConfig, PlannerKind};
 use crate::planner::evaluate::{EvalParams, Target};
-use crate::planner::frontier::{FrontierJob, FrontierParams};
 use crate::planner::gbv::{GbvJob, GbvParams};
 use crate::planner::lbv::Lbv;
-use crate::planner::reach::NavParams;
 use crate::planner::session::{
-    Buffers, Goals, JobOutput, LookAround, Outcome, PlannerInputs, PlannerJob, PlannerStatus, Step,
-    Summary, ViewPlanner, map_counts,
+    Back, JobOutput, LookAround, Outcome, PlannerInputs, PlannerJob, PlannerStatus, Session, Step,
+    Summary, ViewPlanner, neck_goal_for,
 };
 use crate::planner::terms::View;
 use shm_types::{NeckGoal, ObjectMap, PlannerDecision, RobotState, goal_kind};
@@ -48,35 +46,17 @@ pub struct VpsomPlanner {
     cfg: PlannerConfig,
     eval: EvalParams,
     gbv: GbvParams,
-    frontier: FrontierParams,
     mount: CameraMount,
     lbv: Lbv,
     last_lbv: Option<usize>,
     last_cluster: i32,
-    goals: Goals,
-    buffers: Buffers,
-    sides: SideTracker,
+    session: Session,
     look: LookAround,
     mode: Mode,
-    pending: bool,
     tracked: Option<i32>,
     rounds: Vec<(i32, u32)>,
-    given_up: Vec<i32>,
-    blacklist: Vec<[f32; 2]>,
     visited: Vec<(i32, [f32; 2])>,
     decision: Option<Box<PlannerDecision>>,
-    status: PlannerStatus,
-    summary: Summary,
-    jobs: u64,
-}
-
-/// Frontier parameters from the config.
-pub(crate) fn frontier_params(cfg: &PlannerConfig) -> FrontierParams {
-    FrontierParams {
-        min_cells: cfg.frontier.min_cells,
-        blacklist_radius: cfg.frontier.blacklist_radius,
-        nav: NavParams::new(cfg),
-    }
 }
 
 impl VpsomPlanner {
@@ -88,41 +68,20 @@ impl VpsomPlanner {
             cfg: cfg.clone(),
             eval,
             gbv,
-            frontier: frontier_params(cfg),
             mount: camera.mount,
             lbv: Lbv::new(cfg, camera),
             last_lbv: None,
             last_cluster: -1,
-            goals: Goals::new(),
-            buffers: Buffers::default(),
-            sides: SideTracker::new(cfg.bootstrap.sectors),
+            session: Session::new(PlannerKind::Vpsom, cfg, cfg.bootstrap.empty_cluster_sectors),
             look: LookAround::new(
                 cfg.bootstrap.look_around_steps,
                 cfg.bootstrap.neck_tolerance_deg.to_radians(),
             ),
             mode: Mode::LookAround,
-            pending: false,
             tracked: None,
             rounds: Vec::with_capacity(shm_types::MAX_OBJECTS),
-            given_up: Vec::with_capacity(shm_types::MAX_OBJECTS),
-            blacklist: Vec::new(),
             visited: Vec::new(),
             decision: None,
-            status: PlannerStatus::Running,
-            summary: Summary {
-                kind: PlannerKind::Vpsom,
-                status: PlannerStatus::Running,
-                goals_issued: 0,
-                goals_unreachable: 0,
-                rounds: 0,
-                clusters: 0,
-                clusters_done: 0,
-                clusters_given_up: 0,
-                foreground: 0,
-                foreground_done: 0,
-                finished_ns: None,
-            },
-            jobs: 0,
         }
     }
 
@@ -140,46 +99,26 @@ impl VpsomPlanner {
             .iter()
             .find(|(c, _)| *c == id)
             .map_or(0, |r| r.1);
-        if n >= self.cfg.gbv.max_rounds_per_cluster && !self.given_up.contains(&id) {
-            self.given_up.push(id);
+        let given_up = &mut self.session.given_up;
+        if n >= self.cfg.gbv.max_rounds_per_cluster && !given_up.contains(&id) {
+            given_up.push(id);
         }
-    }
-
-    fn finish(&mut self, status: PlannerStatus, now_ns: u64) -> Step {
-        self.status = status;
-        self.summary.finished_ns = Some(now_ns);
-        Step::Finished(self.summary())
     }
 
     fn target(&self, map: &ObjectMap) -> Option<Target> {
         let eps = self.cfg.eps_sopm;
+        let (sides, given_up) = (&self.session.sides, &self.session.given_up);
         let tracked = self
             .tracked
-            .filter(|id| !self.given_up.contains(id))
+            .filter(|id| !given_up.contains(id))
             .and_then(|id| clusters::cluster_info(map, id, eps))
-            .filter(|c| {
-                !(c.done || c.foreground == 0 && self.sides.sides(c.id) >= self.min_sides())
-            });
-        let info = tracked.or_else(|| {
-            clusters::first_unfinished(map, eps, &self.sides, self.min_sides(), &self.given_up)
-        })?;
+            .filter(|c| !(c.done || c.foreground == 0 && sides.sides(c.id) >= self.min_sides()));
+        let info = tracked
+            .or_else(|| clusters::first_unfinished(map, eps, sides, self.min_sides(), given_up))?;
         Some(Target {
             cluster_id: info.id,
             centroid: clusters::unfinished_centroid(map, &info, eps),
         })
-    }
-
-    fn frontier_job(&mut self, inputs: &PlannerInputs<'_>) -> Step {
-        self.mode = Mode::Explore;
-        self.pending = true;
-        self.jobs += 1;
-        Step::Compute(PlannerJob::Frontier(FrontierJob {
-            explore: self.buffers.explore(inputs.explore),
-            nav: self.buffers.nav(inputs.nav),
-            base: inputs.state.base_pose,
-            blacklist: self.blacklist.clone(),
-            params: self.frontier,
-        }))
     }
 }
 
@@ -189,23 +128,13 @@ impl ViewPlanner for VpsomPlanner {
     }
 
     fn next_goal(&mut self, inputs: &PlannerInputs<'_>, now_ns: u64) -> Step {
-        if self.status.is_finished() {
-            return Step::Finished(self.summary());
+        if let Some(step) = self.session.begin(inputs.map) {
+            return step;
         }
         let eps = self.cfg.eps_sopm;
-        map_counts(
-            inputs.map,
-            eps,
-            &self.sides,
-            self.min_sides(),
-            &mut self.summary,
-        );
-        if self.pending {
-            return Step::Wait;
-        }
         let all: Vec<ClusterInfo> =
-            clusters::clusters(inputs.map, eps, &self.sides, self.min_sides());
-        if self.goals.poll(inputs.state) == Outcome::Pending {
+            clusters::clusters(inputs.map, eps, &self.session.sides, self.min_sides());
+        if self.session.goals.poll(inputs.state) == Outcome::Pending {
             // A frontier goal is superseded as soon as a cluster is known.
             if self.mode != Mode::Explore || all.is_empty() {
                 return Step::Wait;
@@ -216,11 +145,12 @@ impl ViewPlanner for VpsomPlanner {
                 self.mode = Mode::LookAround;
                 return Step::Wait;
             }
-            return self.frontier_job(inputs);
+            self.mode = Mode::Explore;
+            return self.session.frontier_job(inputs);
         }
         let open: Vec<ClusterInfo> = all
             .iter()
-            .filter(|c| !c.done && !self.given_up.contains(&c.id))
+            .filter(|c| !c.done && !self.session.given_up.contains(&c.id))
             .copied()
             .collect();
         if open.is_empty() {
@@ -229,76 +159,55 @@ impl ViewPlanner for VpsomPlanner {
             } else {
                 PlannerStatus::NoCandidates
             };
-            return self.finish(status, now_ns);
+            return self.session.finish(status, now_ns);
         }
         self.mode = Mode::Gbv;
-        self.pending = true;
-        self.jobs += 1;
-        Step::Compute(PlannerJob::Gbv(GbvJob {
-            map: self.buffers.map(inputs.map),
-            nav: self.buffers.nav(inputs.nav),
+        let job = GbvJob {
+            map: self.session.buffers.map(inputs.map),
+            nav: self.session.buffers.nav(inputs.nav),
             base: inputs.state.base_pose,
             clusters: open,
             visited: self.visited.clone(),
             params: self.gbv,
-        }))
+        };
+        self.session.compute(PlannerJob::Gbv(job))
     }
 
     fn job_done(&mut self, output: JobOutput, now_ns: u64) -> Step {
-        self.pending = false;
-        match output {
-            JobOutput::Gbv(r) => {
-                self.buffers.put_map(r.map);
-                self.buffers.put_nav(r.nav);
-                self.decision = Some(r.decision);
-                for id in &r.unreachable {
-                    self.count_round(*id);
-                }
-                match r.best {
-                    Some(b) => {
-                        self.count_round(b.cluster_id);
-                        self.tracked = Some(b.cluster_id);
-                        self.visited.push((b.cluster_id, [b.pose[0], b.pose[1]]));
-                        Step::Goal(self.goals.issue(
-                            b.pose,
-                            b.score,
-                            b.cluster_id,
-                            goal_kind::GBV,
-                            now_ns,
-                        ))
-                    }
-                    None => self.finish(PlannerStatus::NoCandidates, now_ns),
-                }
-            }
-            JobOutput::Frontier(r) => {
-                self.buffers.put_explore(r.explore);
-                self.buffers.put_nav(r.nav);
-                match r.goal {
-                    Some((pose, _)) => {
-                        self.blacklist.push([pose[0], pose[1]]);
-                        Step::Goal(self.goals.issue(pose, 0.0, -1, goal_kind::FRONTIER, now_ns))
-                    }
-                    None => self.finish(PlannerStatus::NoCandidates, now_ns),
-                }
-            }
-            JobOutput::Coverage(r) => {
-                self.buffers.put_nav(r.nav);
-                Step::Wait
-            }
+        let r = match self
+            .session
+            .job_back(output, now_ns, PlannerStatus::NoCandidates)
+        {
+            Back::Gbv(r) => r,
+            other => return self.session.discard(other),
+        };
+        self.session.buffers.put_map(r.map);
+        self.session.buffers.put_nav(r.nav);
+        self.decision = Some(r.decision);
+        for id in &r.unreachable {
+            self.count_round(*id);
         }
+        let Some(b) = r.best else {
+            return self.session.finish(PlannerStatus::NoCandidates, now_ns);
+        };
+        self.count_round(b.cluster_id);
+        self.tracked = Some(b.cluster_id);
+        self.visited.push((b.cluster_id, [b.pose[0], b.pose[1]]));
+        Step::Goal(
+            self.session
+                .goals
+                .issue(b.pose, b.score, b.cluster_id, goal_kind::GBV, now_ns),
+        )
     }
 
     fn neck_goal(&mut self, map: &ObjectMap, state: &RobotState, _now_ns: u64) -> NeckGoal {
         let pose = self
             .mount
             .camera_pose(state.base_pose, state.neck_yaw, state.neck_pitch);
-        self.sides.observe(map, &self.eval.camera, &View::new(pose));
-        let mut goal = NeckGoal {
-            map_seq: map.header.seq,
-            frame_stamp_ns: map.last_frame_stamp_ns,
-            pitch: self.mount.pitch(),
-            ..Default::default()
-        };
+        self.session
+            .sides
+            .observe(map, &self.eval.camera, &View::new(pose));
+        let mut goal = neck_goal_for(map, self.mount.pitch());
         let target = self.target(map);
         self.last_cluster = target.map_or(-1, |t| t.cluster_id);
         match target {
@@ -321,23 +230,16 @@ impl ViewPlanner for VpsomPlanner {
     }
 
     fn status(&self) -> PlannerStatus {
-        self.status
+        self.session.status()
     }
 
     fn summary(&self) -> Summary {
-        Summary {
-            status: self.status,
-            goals_issued: self.goals.issued,
-            goals_unreachable: self.goals.unreachable,
-            rounds: self.jobs,
-            clusters_given_up: self.given_up.len() as u32,
-            ..self.summary
-        }
+        self.session.summary()
     }
 
     fn take_decision(&mut self) -> Option<Box<PlannerDecision>> {
         self.decision.take().map(|mut d| {
-            d.state = self.status.code();
+            d.state = self.session.status().code();
             d
         })
     }
@@ -348,7 +250,7 @@ impl ViewPlanner for VpsomPlanner {
         };
         self.lbv.fill_decision(Some(i), d);
         d.cluster_id = self.last_cluster;
-        d.state = self.status.code();
+        d.state = self.session.status().code();
         true
     }
 }
