@@ -13,7 +13,7 @@ use crate::Outcome;
 use crate::payload::{Bytes4M, Bytes8K, Bytes64, Bytes600K};
 use crate::report::{BudgetCheck, SampleLog, Series, histogram_png};
 use crate::settings::{Budgets, IpcSettings, Sched};
-use crate::stats::{Percentiles, ratio, table_header, table_row};
+use crate::stats::{Stats, ratio, table_header, table_row};
 use anyhow::{Context, Result, anyhow, bail};
 use iceoryx2::port::{BackpressureAction, BackpressureInfo};
 use iceoryx2::prelude::{BackpressureStrategy, NodeBuilder, PortFactory as _, ServiceName, ipc};
@@ -41,7 +41,7 @@ pub struct CaseResult {
     /// `"ports"` (runtime) or `"raw"` (iceoryx2).
     pub layer: String,
     /// Latency.
-    pub latency: Percentiles,
+    pub latency: Stats,
     /// Messages measured (after the warm-up).
     pub received: u64,
     /// Messages never received.
@@ -612,7 +612,7 @@ fn receive<T: Message>(
         mode: if event { "event" } else { "poll" }.into(),
         rate_hz: wire.rate_hz,
         layer: if wire.raw { "raw" } else { "ports" }.into(),
-        latency: Percentiles::of_samples(&latencies),
+        latency: Stats::of_samples(&latencies),
         received,
         lost: wire.count.saturating_sub(received),
         reordered,
