@@ -59,98 +59,85 @@ pub enum Overflow {
     Discard,
 }
 
-/// Settings of one topic's services (the `[ports]` defaults merged with a per-topic override).
-#[derive(Debug, Clone, Copy, PartialEq, Eq)]
-pub struct TopicSettings {
-    /// Samples a late-joining subscriber receives on connection.
-    pub history_size: usize,
-    /// Unread samples a subscriber can buffer.
-    pub subscriber_buffer: usize,
-    /// Samples a subscriber can hold borrowed at once.
-    pub subscriber_max_borrowed: usize,
-    /// Samples a publisher can hold loaned at once.
-    pub publisher_max_loaned: usize,
-    /// Publishers per topic.
-    pub max_publishers: usize,
-    /// Subscribers per topic.
-    pub max_subscribers: usize,
-    /// Nodes (processes) that may open the topic.
-    pub max_nodes: usize,
-    /// Full-buffer behaviour.
-    pub overflow: Overflow,
-    /// With [`Overflow::Block`]: give up after this long (ms).
-    pub block_timeout_ms: u64,
-}
-
-/// A per-topic override in `[ports.topics.<topic>]`; every key is optional.
-#[derive(Debug, Clone, Default, PartialEq, Eq, Deserialize)]
-#[serde(deny_unknown_fields, default)]
-pub struct TopicOverride {
-    /// See [`TopicSettings::history_size`].
-    pub history_size: Option<usize>,
-    /// See [`TopicSettings::subscriber_buffer`].
-    pub subscriber_buffer: Option<usize>,
-    /// See [`TopicSettings::subscriber_max_borrowed`].
-    pub subscriber_max_borrowed: Option<usize>,
-    /// See [`TopicSettings::publisher_max_loaned`].
-    pub publisher_max_loaned: Option<usize>,
-    /// See [`TopicSettings::max_publishers`].
-    pub max_publishers: Option<usize>,
-    /// See [`TopicSettings::max_subscribers`].
-    pub max_subscribers: Option<usize>,
-    /// See [`TopicSettings::max_nodes`].
-    pub max_nodes: Option<usize>,
-    /// See [`TopicSettings::overflow`].
-    pub overflow: Option<Overflow>,
-    /// See [`TopicSettings::block_timeout_ms`].
-    pub block_timeout_ms: Option<u64>,
-}
-
-/// `[ports]` section: iceoryx2 service settings shared by every topic, plus per-topic overrides.
-#[derive(Debug, Clone, PartialEq, Eq, Deserialize)]
-#[serde(deny_unknown_fields, default)]
-pub struct PortsConfig {
-    /// Middle part of every service name, `vpsom/<namespace>/<topic>`: runs with different
-    /// namespaces never collide. `[A-Za-z0-9_-]`, 1..=48 characters.
-    pub namespace: String,
-    /// See [`TopicSettings::history_size`].
-    pub history_size: usize,
-    /// See [`TopicSettings::subscriber_buffer`].
-    pub subscriber_buffer: usize,
-    /// See [`TopicSettings::subscriber_max_borrowed`].
-    pub subscriber_max_borrowed: usize,
-    /// See [`TopicSettings::publisher_max_loaned`].
-    pub publisher_max_loaned: usize,
-    /// See [`TopicSettings::max_publishers`].
-    pub max_publishers: usize,
-    /// See [`TopicSettings::max_subscribers`].
-    pub max_subscribers: usize,
-    /// See [`TopicSettings::max_nodes`].
-    pub max_nodes: usize,
-    /// See [`TopicSettings::overflow`].
-    pub overflow: Overflow,
-    /// See [`TopicSettings::block_timeout_ms`].
-    pub block_timeout_ms: u64,
-    /// Per-topic overrides, keyed by topic name.
-    pub topics: BTreeMap<String, TopicOverride>,
-}
-
-impl Default for PortsConfig {
-    fn default() -> Self {
-        Self {
-            namespace: "main".into(),
-            history_size: 0,
-            subscriber_buffer: 2,
-            subscriber_max_borrowed: 2,
-            publisher_max_loaned: 2,
-            max_publishers: 2,
-            max_subscribers: 8,
-            max_nodes: 16,
-            overflow: Overflow::Overwrite,
-            block_timeout_ms: 1000,
-            topics: BTreeMap::new(),
+/// Declares every per-topic service setting once, as `field: type = built-in default`, and
+/// derives from that list [`TopicSettings`] (resolved values), [`TopicOverride`] (the same keys,
+/// each optional), [`PortsConfig`] (`namespace`, the same keys as every topic's defaults, and
+/// `topics`), `PortsConfig::default()` and the merge `PortsConfig::settings_with`.
+macro_rules! topic_settings {
+    ($( $(#[doc = $doc:literal])+ $field:ident: $ty:ty = $default:expr, )+) => {
+        /// Settings of one topic's services (the `[ports]` defaults merged with a per-topic
+        /// override).
+        #[derive(Debug, Clone, Copy, PartialEq, Eq)]
+        pub struct TopicSettings {
+            $( $(#[doc = $doc])+ pub $field: $ty, )+
         }
-    }
+
+        /// A per-topic override in `[ports.topics.<topic>]`; every key is optional.
+        #[derive(Debug, Clone, Default, PartialEq, Eq, Deserialize)]
+        #[serde(deny_unknown_fields, default)]
+        pub struct TopicOverride {
+            $(
+                #[doc = concat!("See [`TopicSettings::", stringify!($field), "`].")]
+                pub $field: Option<$ty>,
+            )+
+        }
+
+        /// `[ports]` section: iceoryx2 service settings shared by every topic, plus per-topic
+        /// overrides.
+        #[derive(Debug, Clone, PartialEq, Eq, Deserialize)]
+        #[serde(deny_unknown_fields, default)]
+        pub struct PortsConfig {
+            /// Middle part of every service name, `vpsom/<namespace>/<topic>`: runs with
+            /// different namespaces never collide. `[A-Za-z0-9_-]`, 1..=48 characters.
+            pub namespace: String,
+            $(
+                #[doc = concat!("See [`TopicSettings::", stringify!($field), "`].")]
+                pub $field: $ty,
+            )+
+            /// Per-topic overrides, keyed by topic name.
+            pub topics: BTreeMap<String, TopicOverride>,
+        }
+
+        impl Default for PortsConfig {
+            fn default() -> Self {
+                Self {
+                    namespace: "main".into(),
+                    $( $field: $default, )+
+                    topics: BTreeMap::new(),
+                }
+            }
+        }
+
+        impl PortsConfig {
+            /// The defaults merged with `o`.
+            fn settings_with(&self, o: &TopicOverride) -> TopicSettings {
+                TopicSettings {
+                    $( $field: o.$field.unwrap_or(self.$field), )+
+                }
+            }
+        }
+    };
+}
+
+topic_settings! {
+    /// Samples a late-joining subscriber receives on connection.
+    history_size: usize = 0,
+    /// Unread samples a subscriber can buffer.
+    subscriber_buffer: usize = 2,
+    /// Samples a subscriber can hold borrowed at once.
+    subscriber_max_borrowed: usize = 2,
+    /// Samples a publisher can hold loaned at once.
+    publisher_max_loaned: usize = 2,
+    /// Publishers per topic.
+    max_publishers: usize = 2,
+    /// Subscribers per topic.
+    max_subscribers: usize = 8,
+    /// Nodes (processes) that may open the topic.
+    max_nodes: usize = 16,
+    /// Full-buffer behaviour.
+    overflow: Overflow = Overflow::Overwrite,
+    /// With [`Overflow::Block`]: give up after this long (ms).
+    block_timeout_ms: u64 = 1000,
 }
 
 impl PortsConfig {
@@ -202,22 +189,6 @@ impl PortsConfig {
         match self.topics.get(topic) {
             Some(o) => self.settings_with(o),
             None => self.settings_with(&TopicOverride::default()),
-        }
-    }
-
-    fn settings_with(&self, o: &TopicOverride) -> TopicSettings {
-        TopicSettings {
-            history_size: o.history_size.unwrap_or(self.history_size),
-            subscriber_buffer: o.subscriber_buffer.unwrap_or(self.subscriber_buffer),
-            subscriber_max_borrowed: o
-                .subscriber_max_borrowed
-                .unwrap_or(self.subscriber_max_borrowed),
-            publisher_max_loaned: o.publisher_max_loaned.unwrap_or(self.publisher_max_loaned),
-            max_publishers: o.max_publishers.unwrap_or(self.max_publishers),
-            max_subscribers: o.max_subscribers.unwrap_or(self.max_subscribers),
-            max_nodes: o.max_nodes.unwrap_or(self.max_nodes),
-            overflow: o.overflow.unwrap_or(self.overflow),
-            block_timeout_ms: o.block_timeout_ms.unwrap_or(self.block_timeout_ms),
         }
     }
 }
