@@ -7,7 +7,9 @@
 //! timeout instead of polling.
 //!
 //! Zero copy: [`Publisher::loan`] hands out a sample that lives in shared memory and has been
-//! zero-filled **in place** (a `DepthFrame` is 600 KB; it is never built on the stack); the
+//! zero-filled **in place** (a `DepthFrame` is 600 KB; it is never built on the stack), or, for
+//! [`AnyBitPattern`] messages whose producer overwrites everything it publishes,
+//! [`Publisher::loan_reused`] hands it out as it is (an earlier sample's bytes, no fill); the
 //! caller fills it through `DerefMut` and calls [`Loan::send`], which stamps the [`Header`]
 //! (per-publisher sequence number starting at 1, caller's time stamps). A subscriber reads the
 //! same memory through a borrowed [`Received`] sample (`Deref<Target = T>`).
@@ -31,12 +33,14 @@ use iceoryx2::prelude::{
 };
 use iceoryx2::sample::Sample;
 use iceoryx2::sample_mut::SampleMut;
+use iceoryx2::sample_mut_uninit::SampleMutUninit;
 use iceoryx2::service::port_factory::{event, publish_subscribe};
 use serde::Deserialize;
-use shm_types::{Header, Message};
+use shm_types::{AnyBitPattern, Header, Message};
 use std::cell::Cell;
 use std::collections::BTreeMap;
 use std::fmt;
+use std::mem::MaybeUninit;
 use std::ops::{Deref, DerefMut};
 use std::time::{Duration, Instant};
 
@@ -563,13 +567,16 @@ impl<T: Message> Publisher<T> {
     /// A zero-filled sample in shared memory for the caller to fill in place, then
     /// [`Loan::send`]. Dropping the loan without sending returns the memory.
     pub fn loan(&self) -> Result<Loan<'_, T>, PortError> {
-        let uninit = self.port.loan_uninit().map_err(|e| PortError::Loan {
+        Ok(Loan {
+            sample: shm_types::init_zeroed(self.loan_uninit()?),
+            publisher: self,
+        })
+    }
+
+    fn loan_uninit(&self) -> Result<SampleMutUninit<ipc::Service, MaybeUninit<T>, ()>, PortError> {
+        self.port.loan_uninit().map_err(|e| PortError::Loan {
             service: self.services.name.clone(),
             reason: e.to_string(),
-        })?;
-        Ok(Loan {
-            sample: shm_types::init_zeroed(uninit),
-            publisher: self,
         })
     }
 
@@ -597,7 +604,24 @@ impl<T: Message> Publisher<T> {
     }
 }
 
-/// A loaned, zero-initialised sample being filled by the producer. `DerefMut<Target = T>`.
+impl<T: Message + AnyBitPattern> Publisher<T> {
+    /// Like [`Publisher::loan`] but **not** zero-filled: the sample holds whatever its slot of
+    /// this publisher's shared memory last held, i.e. an earlier sample of this topic (possibly
+    /// a partly written one that was dropped unsent) or zeros. For producers that overwrite every
+    /// field they publish: it saves the fill (600 KB for a `DepthFrame`). Whatever the producer
+    /// leaves unwritten is stale, so write every field a consumer reads — e.g. all
+    /// `width × height` pixels; entries beyond the used part of an array may stay stale only if
+    /// consumers never read them.
+    pub fn loan_reused(&self) -> Result<Loan<'_, T>, PortError> {
+        Ok(Loan {
+            sample: shm_types::init_reused(self.loan_uninit()?),
+            publisher: self,
+        })
+    }
+}
+
+/// A loaned sample being filled by the producer (zero-filled, or stale with
+/// [`Publisher::loan_reused`]). `DerefMut<Target = T>`.
 pub struct Loan<'p, T: Message> {
     sample: SampleMut<ipc::Service, T, ()>,
     publisher: &'p Publisher<T>,
@@ -812,7 +836,7 @@ impl<T: Message> Subscriber<T> {
 #[cfg(test)]
 mod tests {
     use super::*;
-    use shm_types::NeckGoal;
+    use shm_types::{DepthFrame, NeckGoal};
 
     fn unique_ns(tag: &str) -> String {
         format!(
@@ -873,6 +897,57 @@ mod tests {
             "latest() received seq 2 and dropped it: no gap"
         );
         assert!(sub.receive().unwrap().is_none());
+    }
+
+    /// Frame `k` as the test writes it: `width = k`, the first `k` pixels `= k`, `sim_ns = k`.
+    fn is_frame_k(f: &DepthFrame, k: u64) -> bool {
+        f.width as u64 == k
+            && f.height == u32::from(k > 0)
+            && f.header.sim_time_ns == k
+            && f.pixels().iter().all(|&p| u64::from(p) == k)
+    }
+
+    #[test]
+    fn loan_reused_hands_out_a_previous_sample_or_zeros_and_sends() {
+        let cfg = PortsConfig {
+            subscriber_buffer: 1,
+            subscriber_max_borrowed: 1,
+            publisher_max_loaned: 1,
+            max_subscribers: 1,
+            ..PortsConfig::default()
+        };
+        let ctx = PortContext::with_namespace(&cfg, "unit", &unique_ns("reuse")).unwrap();
+        let sub = ctx.subscriber::<DepthFrame>("depth").unwrap();
+        let publ = ctx.publisher::<DepthFrame>("depth").unwrap();
+        // More rounds than the data segment has slots, so some slot is handed out again.
+        let rounds = 64u64;
+        let mut stale = 0;
+        for k in 1..=rounds {
+            let mut f = publ.loan_reused().unwrap();
+            let before = f.header.seq;
+            assert!(
+                before < k && is_frame_k(&f, before),
+                "round {k}: not zeros and not an earlier frame (seq {before}, width {})",
+                f.width
+            );
+            stale += u64::from(before > 0);
+            f.width = k as u32;
+            f.height = 1;
+            f.pixels_mut().fill(k as u16);
+            let sent = f
+                .send(Stamp {
+                    source_ns: 0,
+                    sim_ns: k,
+                })
+                .unwrap();
+            assert_eq!(sent.seq, k);
+            let got = sub.receive().unwrap().unwrap();
+            assert!(is_frame_k(&got, k), "round {k}: received a different frame");
+        }
+        assert!(stale > 0, "no slot was reused in {rounds} rounds");
+        // The zero-filling loan still clears a slot that held a frame.
+        let f = publ.loan().unwrap();
+        assert!(is_frame_k(&f, 0) && f.header.seq == 0 && f.depth_mm.iter().all(|&p| p == 0));
     }
 
     #[test]
