@@ -11,7 +11,7 @@
 use crate::Outcome;
 use crate::report::{BudgetCheck, SampleLog, Series, histogram_png};
 use crate::settings::{Budgets, E2eSettings};
-use crate::stats::{Percentiles, table_header, table_row};
+use crate::stats::{Stats, table_header, table_row};
 use anyhow::{Context, Result, anyhow, bail};
 use runtime::clock::{Clock, MonotonicClock};
 use runtime::executor::{Control, Cycle, EventTrace, Executor, ExecutorConfig};
@@ -190,11 +190,11 @@ pub fn run(
         .flat_map(|n| exec[n].iter().copied())
         .collect();
     let lbv_misses: u64 = lbv_names.iter().map(|n| misses[n]).sum();
-    let p_map = Percentiles::of_samples(&frame_map);
-    let p_lbv = Percentiles::of_samples(&frame_lbv);
-    let p_age = Percentiles::of_samples(&lbv_age);
-    let p_exec = Percentiles::of_samples(&lbv_exec);
-    let p_gbv = Percentiles::of_samples(&gbv);
+    let p_map = Stats::of_samples(&frame_map);
+    let p_lbv = Stats::of_samples(&frame_lbv);
+    let p_age = Stats::of_samples(&lbv_age);
+    let p_exec = Stats::of_samples(&lbv_exec);
+    let p_gbv = Stats::of_samples(&gbv);
     let mut md = format!(
         "# vpsom-rt-tests e2e\n\nPipeline: `{cmdline}` (namespace `{ns}`). {sessions} session(s) \
          ({sessions_finished} ended by the planner and were followed by a new one), each with \

@@ -4,7 +4,9 @@
 //! The parent is the receiver; each case re-executes this binary as the hidden `ipc-pub`
 //! subcommand (the publisher). Latency = receive time − the send time the publisher wrote into
 //! the header just before `send` (both `CLOCK_MONOTONIC`, which is system-wide), so the cost of
-//! loaning and filling a sample is excluded in both layers. Services use backpressure
+//! loaning and filling a sample is excluded in both layers. Each loan is either zero-filled
+//! (`zero`: `Publisher::loan`, `shm_types::init_zeroed`) or taken as it is (`reuse`:
+//! `Publisher::loan_reused`, `shm_types::init_reused`), the same way in both layers. Services use backpressure
 //! (`block`): nothing may be lost, and sequence gaps (loss) and regressions (reordering) are
 //! counted and must be zero. Flat out, the publisher sends back to back, so the latency then
 //! includes waiting for room in the subscriber's buffer (the achieved rate is reported).
@@ -13,7 +15,7 @@ use crate::Outcome;
 use crate::payload::{Bytes4M, Bytes8K, Bytes64, Bytes600K};
 use crate::report::{BudgetCheck, SampleLog, Series, histogram_png};
 use crate::settings::{Budgets, IpcSettings, Sched};
-use crate::stats::{Percentiles, ratio, table_header, table_row};
+use crate::stats::{Stats, ratio, table_header, table_row};
 use anyhow::{Context, Result, anyhow, bail};
 use iceoryx2::port::{BackpressureAction, BackpressureInfo};
 use iceoryx2::prelude::{BackpressureStrategy, NodeBuilder, PortFactory as _, ServiceName, ipc};
@@ -21,7 +23,7 @@ use runtime::clock::{Clock, MonotonicClock};
 use runtime::ports::{Overflow, PortContext, PortsConfig, Stamp};
 use serde::Serialize;
 use serde_json::json;
-use shm_types::{Header, Message};
+use shm_types::{AnyBitPattern, Header, Message};
 use std::path::Path;
 use std::process::{Child, Command, Stdio};
 use std::time::{Duration, Instant};
@@ -40,16 +42,24 @@ pub struct CaseResult {
     pub rate_hz: f64,
     /// `"ports"` (runtime) or `"raw"` (iceoryx2).
     pub layer: String,
+    /// How the publisher prepares each loan: `"zero"` (zero-filled) or `"reuse"` (as it is).
+    pub fill: String,
     /// Latency.
-    pub latency: Percentiles,
+    pub latency: Stats,
     /// Messages measured (after the warm-up).
     pub received: u64,
     /// Messages never received.
     pub lost: u64,
     /// Messages received after a later one.
     pub reordered: u64,
-    /// Achieved message rate, 1/s.
+    /// Achieved message rate, 1/s (over the time between first and last receive of each round).
     pub rate_achieved: f64,
+    /// Seconds from first to last receive, summed over rounds.
+    #[serde(skip)]
+    busy_s: f64,
+    /// Receive intervals within those spans.
+    #[serde(skip)]
+    intervals: u64,
     /// Receive times, ns (parallel to `latencies`).
     #[serde(skip)]
     times: Vec<u64>,
@@ -77,6 +87,8 @@ pub struct Wire {
     pub buffer: usize,
     /// Notify the paired event on every send (always with the runtime's ports).
     pub notify: bool,
+    /// Loan without zero-filling (`loan_reused` / `init_reused`) instead of zero-filled.
+    pub reuse: bool,
 }
 
 impl Wire {
@@ -101,6 +113,9 @@ impl Wire {
         }
         if self.notify {
             a.push("--notify".into());
+        }
+        if self.reuse {
+            a.push("--reuse".into());
         }
         a
     }
@@ -133,55 +148,107 @@ impl Drop for ChildGuard {
 
 /// Run every configured case.
 pub fn run(s: &IpcSettings, budgets: &Budgets, dir: &Path, log: &mut SampleLog) -> Result<Outcome> {
-    let mut results: Vec<CaseResult> = Vec::new();
-    let layers: Vec<bool> = if s.raw {
-        vec![false, true]
-    } else {
-        vec![false]
-    };
+    let layers: &[bool] = if s.raw { &[false, true] } else { &[false] };
+    let mut cases: Vec<(Wire, bool)> = Vec::new();
     for &rate in &s.rates_hz {
         for mode in &s.modes {
-            for payload in &s.payloads {
-                for &raw in &layers {
-                    let count = if rate > 0.0 {
-                        ((rate * s.paced_duration_s).round() as u64).max(1)
-                    } else {
-                        s.flat_messages
-                    };
-                    let wire = Wire {
-                        ns: format!("rtt{}-{}", std::process::id(), results.len()),
-                        payload: payload.clone(),
-                        raw,
-                        rate_hz: rate,
-                        count,
-                        warmup: s.warmup_messages,
-                        buffer: s.subscriber_buffer,
-                        notify: !raw || mode == "event",
-                    };
-                    let r = run_case(&wire, mode == "event", &s.sched, &s.publisher_cpus)
-                        .with_context(|| {
-                            format!(
-                                "ipc case {payload} {mode} {rate} Hz {}",
-                                if raw { "raw" } else { "ports" }
-                            )
-                        })?;
-                    eprintln!(
-                        "ipc {:>6} {:>5} {:>5} Hz {:>5}: p50 {:.1} µs p99 {:.1} µs lost {} reordered {}",
-                        r.payload,
-                        r.mode,
-                        r.rate_hz,
-                        r.layer,
-                        r.latency.p50 as f64 / 1e3,
-                        r.latency.p99 as f64 / 1e3,
-                        r.lost,
-                        r.reordered
-                    );
-                    results.push(r);
+            for fill in &s.fills {
+                for payload in &s.payloads {
+                    for &raw in layers {
+                        let wire = Wire {
+                            ns: String::new(),
+                            payload: payload.clone(),
+                            raw,
+                            rate_hz: rate,
+                            count: if rate > 0.0 {
+                                ((rate * s.paced_duration_s).round() as u64).max(1)
+                            } else {
+                                s.flat_messages
+                            },
+                            warmup: s.warmup_messages,
+                            buffer: s.subscriber_buffer,
+                            notify: !raw || mode == "event",
+                            reuse: fill == "reuse",
+                        };
+                        cases.push((wire, mode == "event"));
+                    }
                 }
             }
         }
     }
+    // Round k runs every case with its k-th share of the messages, so a slow drift of the
+    // machine (other tenants, frequency) affects every case alike instead of whichever ran then.
+    let rounds = u64::from(s.rounds);
+    let mut results: Vec<Option<CaseResult>> = vec![None; cases.len()];
+    for round in 0..rounds {
+        if rounds > 1 {
+            eprintln!("ipc round {}/{rounds}", round + 1);
+        }
+        for (k, ((wire, event), merged)) in cases.iter().zip(&mut results).enumerate() {
+            let share = wire.count / rounds + u64::from(round < wire.count % rounds);
+            if share == 0 {
+                continue;
+            }
+            let part = Wire {
+                ns: format!("rtt{}-{k}-{round}", std::process::id()),
+                count: share,
+                ..wire.clone()
+            };
+            let r = run_case(&part, *event, &s.sched, &s.publisher_cpus).with_context(|| {
+                format!(
+                    "ipc case {} {} {} Hz {} {}",
+                    wire.payload,
+                    if *event { "event" } else { "poll" },
+                    wire.rate_hz,
+                    if wire.raw { "raw" } else { "ports" },
+                    fill_name(wire.reuse)
+                )
+            })?;
+            match merged {
+                Some(m) => m.absorb(r),
+                None => *merged = Some(r),
+            }
+        }
+    }
+    let results: Vec<CaseResult> = results.into_iter().flatten().collect();
+    for r in &results {
+        eprintln!(
+            "ipc {:>6} {:>5} {:>5} Hz {:>5} {:>5}: p50 {:.1} µs p99 {:.1} µs lost {} reordered {}",
+            r.payload,
+            r.mode,
+            r.rate_hz,
+            r.layer,
+            r.fill,
+            r.latency.p50 as f64 / 1e3,
+            r.latency.p99 as f64 / 1e3,
+            r.lost,
+            r.reordered
+        );
+    }
     report(s, budgets, dir, log, &results)
+}
+
+impl CaseResult {
+    /// Add another round of the same case.
+    fn absorb(&mut self, r: CaseResult) {
+        self.received += r.received;
+        self.lost += r.lost;
+        self.reordered += r.reordered;
+        self.busy_s += r.busy_s;
+        self.intervals += r.intervals;
+        self.rate_achieved = if self.busy_s > 0.0 {
+            self.intervals as f64 / self.busy_s
+        } else {
+            0.0
+        };
+        self.times.extend(r.times);
+        self.latencies.extend(r.latencies);
+        self.latency = Stats::of_samples(&self.latencies);
+    }
+}
+
+fn fill_name(reuse: bool) -> &'static str {
+    if reuse { "reuse" } else { "zero" }
 }
 
 fn rate_name(rate: f64) -> String {
@@ -202,7 +269,10 @@ fn report(
     let mut md = format!(
         "# vpsom-rt-tests ipc\n\nOne-way latency between two processes (receive time − send stamp). \
          Receiver scheduling: {} prio {} cpus {:?}; publisher cpus {:?}; subscriber buffer {} \
-         (backpressure); {} warm-up messages per case; paced cases {} s, flat-out cases {} messages.\n\n",
+         (backpressure); {} warm-up messages per case; paced cases {} s, flat-out cases {} messages. \
+         Fill: `zero` = each loan zero-filled by the publisher before the send stamp \
+         (`Publisher::loan`), `reuse` = loaned as it is (`Publisher::loan_reused`); raw iceoryx2 the \
+         same way.\n\n",
         s.sched.policy,
         s.sched.priority,
         s.sched.cpus,
@@ -216,6 +286,7 @@ fn report(
         "rate",
         "mode",
         "payload",
+        "fill",
         "layer",
         "lost",
         "reordered",
@@ -229,6 +300,7 @@ fn report(
                 rate_name(r.rate_hz),
                 r.mode.clone(),
                 r.payload.clone(),
+                r.fill.clone(),
                 r.layer.clone(),
                 r.lost.to_string(),
                 r.reordered.to_string(),
@@ -237,8 +309,9 @@ fn report(
             &r.latency,
         );
         let topic = format!(
-            "/ipc/{}/{}/{}/{}",
+            "/ipc/{}/{}/{}/{}/{}",
             r.layer,
+            r.fill,
             r.mode,
             if r.rate_hz > 0.0 {
                 format!("{}hz", r.rate_hz)
@@ -252,10 +325,11 @@ fn report(
         }
         if r.lost > 0 || r.reordered > 0 {
             errors.push(format!(
-                "ipc {} {} {} {}: {} lost, {} reordered (must be 0)",
+                "ipc {} {} {} {} {}: {} lost, {} reordered (must be 0)",
                 r.payload,
                 r.mode,
                 rate_name(r.rate_hz),
+                r.fill,
                 r.layer,
                 r.lost,
                 r.reordered
@@ -264,10 +338,11 @@ fn report(
         if r.layer == "ports" && r.rate_hz > 0.0 {
             checks.push(BudgetCheck::at_most(
                 format!(
-                    "ipc_p99_us ({} {} {})",
+                    "ipc_p99_us ({} {} {} {})",
                     r.payload,
                     r.mode,
-                    rate_name(r.rate_hz)
+                    rate_name(r.rate_hz),
+                    r.fill
                 ),
                 r.latency.p99 as f64 / 1e3,
                 budgets.ipc_p99_us,
@@ -275,34 +350,40 @@ fn report(
             ));
         }
     }
-    let find = |payload: &str, mode: &str, rate: f64, layer: &str| {
+    let find = |like: &CaseResult, payload: &str, layer: &str| {
         results.iter().find(|r| {
-            r.payload == payload && r.mode == mode && r.rate_hz == rate && r.layer == layer
+            r.payload == payload
+                && r.mode == like.mode
+                && r.rate_hz == like.rate_hz
+                && r.fill == like.fill
+                && r.layer == layer
         })
     };
     let mut overhead = Vec::new();
     if s.raw {
         md += "\n## Overhead of the runtime layer (ports p50 / raw iceoryx2 p50)\n\n\
-               | rate | mode | payload | ports p50 µs | raw p50 µs | ratio | ratio p99 |\n|---|---|---|---|---|---|---|\n";
+               | rate | mode | payload | fill | ports p50 µs | raw p50 µs | ratio | ratio p99 |\n|---|---|---|---|---|---|---|---|\n";
         for r in results.iter().filter(|r| r.layer == "ports") {
-            if let Some(raw) = find(&r.payload, &r.mode, r.rate_hz, "raw") {
+            if let Some(raw) = find(r, &r.payload, "raw") {
                 let q = ratio(r.latency.p50, raw.latency.p50);
                 let q99 = ratio(r.latency.p99, raw.latency.p99);
                 md += &format!(
-                    "| {} | {} | {} | {:.1} | {:.1} | {q:.2} | {q99:.2} |\n",
+                    "| {} | {} | {} | {} | {:.1} | {:.1} | {q:.2} | {q99:.2} |\n",
                     rate_name(r.rate_hz),
                     r.mode,
                     r.payload,
+                    r.fill,
                     r.latency.p50 as f64 / 1e3,
                     raw.latency.p50 as f64 / 1e3
                 );
-                overhead.push(json!({"payload": r.payload, "mode": r.mode, "rate_hz": r.rate_hz, "p50_ratio": q, "p99_ratio": q99}));
+                overhead.push(json!({"payload": r.payload, "mode": r.mode, "rate_hz": r.rate_hz, "fill": r.fill, "p50_ratio": q, "p99_ratio": q99}));
                 checks.push(BudgetCheck::at_most(
                     format!(
-                        "ipc_overhead_p50 ({} {} {})",
+                        "ipc_overhead_p50 ({} {} {} {})",
                         r.payload,
                         r.mode,
-                        rate_name(r.rate_hz)
+                        rate_name(r.rate_hz),
+                        r.fill
                     ),
                     q,
                     budgets.ipc_overhead_p50,
@@ -318,24 +399,30 @@ fn report(
         .find(|p| s.payloads.iter().any(|q| q == p));
     if let Some(big) = largest.filter(|_| s.payloads.iter().any(|q| q == "8KiB")) {
         md += &format!(
-            "\n## Zero-copy flatness (p50 {big} / p50 8KiB − 1)\n\n| rate | mode | layer | 8KiB p50 µs | {big} p50 µs | deviation |\n|---|---|---|---|---|---|\n"
+            "\n## Zero-copy flatness (p50 {big} / p50 8KiB − 1)\n\n| rate | mode | fill | layer | 8KiB p50 µs | {big} p50 µs | deviation |\n|---|---|---|---|---|---|---|\n"
         );
         for r in results.iter().filter(|r| r.payload == "8KiB") {
-            if let Some(b) = find(big, &r.mode, r.rate_hz, &r.layer) {
+            if let Some(b) = find(r, big, &r.layer) {
                 let dev = ratio(b.latency.p50, r.latency.p50) - 1.0;
                 md += &format!(
-                    "| {} | {} | {} | {:.1} | {:.1} | {:+.1} % |\n",
+                    "| {} | {} | {} | {} | {:.1} | {:.1} | {:+.1} % |\n",
                     rate_name(r.rate_hz),
                     r.mode,
+                    r.fill,
                     r.layer,
                     r.latency.p50 as f64 / 1e3,
                     b.latency.p50 as f64 / 1e3,
                     dev * 100.0
                 );
-                flatness.push(json!({"mode": r.mode, "rate_hz": r.rate_hz, "layer": r.layer, "large": big, "deviation": dev}));
+                flatness.push(json!({"mode": r.mode, "rate_hz": r.rate_hz, "fill": r.fill, "layer": r.layer, "large": big, "deviation": dev}));
                 if r.layer == "ports" {
                     checks.push(BudgetCheck::at_most(
-                        format!("ipc_flatness ({} {})", r.mode, rate_name(r.rate_hz)),
+                        format!(
+                            "ipc_flatness ({} {} {})",
+                            r.mode,
+                            rate_name(r.rate_hz),
+                            r.fill
+                        ),
                         dev.abs(),
                         budgets.ipc_flatness,
                         "",
@@ -350,7 +437,11 @@ fn report(
                 .iter()
                 .filter(|r| r.rate_hz == rate && &r.mode == mode)
                 .map(|r| Series {
-                    label: format!("{} {}", r.payload, r.layer),
+                    label: if s.fills.len() > 1 {
+                        format!("{} {} {}", r.payload, r.layer, r.fill)
+                    } else {
+                        format!("{} {}", r.payload, r.layer)
+                    },
                     samples: &r.latencies,
                 })
                 .collect();
@@ -607,20 +698,24 @@ fn receive<T: Message>(
         (Some(a), Some(b)) if b > a => (b - a) as f64 / 1e9,
         _ => 0.0,
     };
+    let intervals = if span > 0.0 { received - 1 } else { 0 };
     Ok(CaseResult {
         payload: wire.payload.clone(),
         mode: if event { "event" } else { "poll" }.into(),
         rate_hz: wire.rate_hz,
         layer: if wire.raw { "raw" } else { "ports" }.into(),
-        latency: Percentiles::of_samples(&latencies),
+        fill: fill_name(wire.reuse).into(),
+        latency: Stats::of_samples(&latencies),
         received,
         lost: wire.count.saturating_sub(received),
         reordered,
         rate_achieved: if span > 0.0 {
-            (received - 1) as f64 / span
+            intervals as f64 / span
         } else {
             0.0
         },
+        busy_s: span,
+        intervals,
         times,
         latencies,
     })
@@ -648,7 +743,7 @@ enum Pub<T: Message> {
     Raw(Box<RawPub<T>>),
 }
 
-impl<T: Message> Pub<T> {
+impl<T: Message + AnyBitPattern> Pub<T> {
     fn open(wire: &Wire) -> Result<Self> {
         if wire.raw {
             let (node, ps, ev) = raw_services::<T>(wire)?;
@@ -690,10 +785,14 @@ impl<T: Message> Pub<T> {
         }
     }
 
-    fn send(&self, seq: u64, notify: bool, clock: &MonotonicClock) -> Result<()> {
+    fn send(&self, seq: u64, wire: &Wire, clock: &MonotonicClock) -> Result<()> {
         match self {
             Pub::Ports(p, _) => {
-                let loan = p.loan()?;
+                let loan = if wire.reuse {
+                    p.loan_reused()?
+                } else {
+                    p.loan()?
+                };
                 loan.send(Stamp {
                     source_ns: clock.now_ns(),
                     sim_ns: 0,
@@ -704,14 +803,18 @@ impl<T: Message> Pub<T> {
                     .publisher
                     .loan_uninit()
                     .map_err(|e| anyhow!("raw loan: {e}"))?;
-                let mut sample = shm_types::init_zeroed(uninit);
+                let mut sample = if wire.reuse {
+                    shm_types::init_reused(uninit)
+                } else {
+                    shm_types::init_zeroed(uninit)
+                };
                 *sample.payload_mut().header_mut() = Header {
                     seq,
                     stamp_ns: clock.now_ns(),
                     sim_time_ns: 0,
                 };
                 sample.send().map_err(|e| anyhow!("raw send: {e}"))?;
-                if notify {
+                if wire.notify {
                     r.notifier
                         .notify()
                         .map_err(|e| anyhow!("raw notify: {e}"))?;
@@ -722,7 +825,7 @@ impl<T: Message> Pub<T> {
     }
 }
 
-fn publish<T: Message>(wire: &Wire) -> Result<()> {
+fn publish<T: Message + AnyBitPattern>(wire: &Wire) -> Result<()> {
     let clock = MonotonicClock::new();
     let p = Pub::<T>::open(wire)?;
     let start = Instant::now();
@@ -732,9 +835,14 @@ fn publish<T: Message>(wire: &Wire) -> Result<()> {
         }
         std::thread::sleep(Duration::from_millis(1));
     }
+    // The subscriber attaches its end of the connection on its next receive; until then a
+    // sample is dropped, not held back. Spread the warm-up over >= 100 ms, longer than the
+    // kernel's RT throttling can stall a spinning `SCHED_FIFO` receiver (50 ms of every 1 s),
+    // so it has attached before the measured messages.
+    let gap = Duration::from_millis(2).max(Duration::from_millis(100) / wire.warmup.max(1) as u32);
     for seq in 1..=wire.warmup {
-        p.send(seq, wire.notify, &clock)?;
-        std::thread::sleep(Duration::from_millis(2));
+        p.send(seq, wire, &clock)?;
+        std::thread::sleep(gap);
     }
     let period = if wire.rate_hz > 0.0 {
         (1e9 / wire.rate_hz) as u64
@@ -746,7 +854,7 @@ fn publish<T: Message>(wire: &Wire) -> Result<()> {
         if period > 0 {
             clock.sleep_until(t0 + k * period);
         }
-        p.send(wire.warmup + k + 1, wire.notify, &clock)?;
+        p.send(wire.warmup + k + 1, wire, &clock)?;
     }
     // Stay until the receiver has left (it drains what is buffered first).
     let start = Instant::now();

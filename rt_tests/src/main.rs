@@ -166,12 +166,18 @@ struct IpcArgs {
     /// Rates in Hz (0 = flat out), comma-separated.
     #[arg(long, value_delimiter = ',')]
     rates: Option<Vec<f64>>,
+    /// Loan fills (zero, reuse), comma-separated.
+    #[arg(long, value_delimiter = ',')]
+    fills: Option<Vec<String>>,
     /// Seconds per paced case.
     #[arg(long)]
     paced_duration: Option<f64>,
     /// Messages per flat-out case.
     #[arg(long)]
     flat_messages: Option<u64>,
+    /// Split every case into this many interleaved rounds.
+    #[arg(long)]
+    rounds: Option<u32>,
     /// Skip the raw iceoryx2 comparison.
     #[arg(long)]
     no_raw: bool,
@@ -219,6 +225,8 @@ struct IpcPubArgs {
     raw: bool,
     #[arg(long)]
     notify: bool,
+    #[arg(long)]
+    reuse: bool,
     #[command(flatten)]
     sched: SchedArgs,
 }
@@ -249,6 +257,7 @@ fn real_main() -> Result<std::process::ExitCode> {
                 warmup: a.warmup,
                 buffer: a.buffer,
                 notify: a.notify,
+                reuse: a.reuse,
             };
             ipc::publisher(&wire, &sched)?;
             return Ok(std::process::ExitCode::SUCCESS);
@@ -288,8 +297,10 @@ fn real_main() -> Result<std::process::ExitCode> {
             set(&mut i.payloads, a.payloads.clone());
             set(&mut i.modes, a.modes.clone());
             set(&mut i.rates_hz, a.rates.clone());
+            set(&mut i.fills, a.fills.clone());
             set(&mut i.paced_duration_s, a.paced_duration);
             set(&mut i.flat_messages, a.flat_messages);
+            set(&mut i.rounds, a.rounds);
             if a.no_raw {
                 i.raw = false;
             }
@@ -371,6 +382,8 @@ fn smoke_settings(s: &mut Settings) {
     s.wakeup.duration_s = 1.0;
     s.ipc.payloads = vec!["64B".into(), "8KiB".into()];
     s.ipc.rates_hz = vec![200.0, 0.0];
+    s.ipc.fills = vec!["zero".into(), "reuse".into()];
+    s.ipc.rounds = 2;
     s.ipc.paced_duration_s = 0.2;
     s.ipc.flat_messages = 200;
     s.ipc.warmup_messages = 3;

@@ -2,12 +2,12 @@
 //! the one OS call the harness needs that has no safe wrapper (`kill(pid, SIGINT)`).
 //!
 //! This is the only module of `rt_tests` that allows `unsafe`: the payloads must implement
-//! `shm_types::ZeroValid` (an `unsafe` marker trait) and iceoryx2's `ZeroCopySend` (whose derive
+//! `shm_types::ZeroValid` and `shm_types::AnyBitPattern` (`unsafe` marker traits) and iceoryx2's `ZeroCopySend` (whose derive
 //! expands to an `unsafe impl`). Each payload is `#[repr(C)]`: a [`Header`] (three `u64`) followed
-//! by a byte array, so the all-zero bit pattern is a valid value and the type holds no pointers.
+//! by a byte array, so every bit pattern is a valid value and the type holds no pointers.
 
 use iceoryx2::prelude::ZeroCopySend;
-use shm_types::{Header, Message, ZeroValid};
+use shm_types::{AnyBitPattern, Header, Message, ZeroValid};
 use std::fmt;
 
 macro_rules! payload {
@@ -26,6 +26,10 @@ macro_rules! payload {
         // SAFETY: `#[repr(C)]` struct of a `Header` (three `u64`) and a `u8` array: no
         // references, no niches; all-zero bytes are a valid value.
         unsafe impl ZeroValid for $name {}
+
+        // SAFETY: as above, and integers accept every bit pattern, so any bytes are a valid
+        // value (no padding either: the sizes are multiples of 8).
+        unsafe impl AnyBitPattern for $name {}
 
         impl Message for $name {
             fn header(&self) -> &Header {

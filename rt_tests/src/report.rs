@@ -173,7 +173,7 @@ pub fn histogram_png(path: &Path, title: &str, series: &[Series<'_>]) -> Result<
     const BINS: usize = 120;
     let mut hi_ns = 1000u64;
     for s in series {
-        let p = crate::stats::Percentiles::of_samples(s.samples);
+        let p = crate::stats::Stats::of_samples(s.samples);
         hi_ns = hi_ns.max((p.p999 as f64 * 1.5) as u64);
     }
     let width = hi_ns as f64 / BINS as f64;

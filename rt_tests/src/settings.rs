@@ -165,10 +165,15 @@ pub struct IpcSettings {
     pub modes: Vec<String>,
     /// Publish rates, Hz; 0 = flat out.
     pub rates_hz: Vec<f64>,
+    /// How the publisher prepares each loan: `"zero"` (zero-filled, `Publisher::loan`) and/or
+    /// `"reuse"` (as it is, `Publisher::loan_reused`).
+    pub fills: Vec<String>,
     /// Messages per paced case = rate · this, s.
     pub paced_duration_s: f64,
     /// Messages per flat-out case.
     pub flat_messages: u64,
+    /// Every case's messages are split into this many rounds, each running all cases in turn.
+    pub rounds: u32,
     /// Unmeasured messages sent first (connection set-up).
     pub warmup_messages: u64,
     /// Subscriber buffer (backpressure: nothing is dropped).
@@ -187,8 +192,10 @@ impl Default for IpcSettings {
             payloads: PAYLOADS.iter().map(|s| s.to_string()).collect(),
             modes: vec!["poll".into(), "event".into()],
             rates_hz: vec![30.0, 0.0],
-            paced_duration_s: 4.0,
+            fills: vec!["reuse".into()],
+            paced_duration_s: 10.0,
             flat_messages: 3000,
+            rounds: 5,
             warmup_messages: 10,
             subscriber_buffer: 4,
             raw: true,
@@ -338,6 +345,14 @@ impl Settings {
                 "must be \"poll\" or \"event\"",
             )?;
         }
+        for f in &i.fills {
+            c.require(
+                f == "zero" || f == "reuse",
+                "ipc.fills",
+                f,
+                "must be \"zero\" or \"reuse\"",
+            )?;
+        }
         for &r in &i.rates_hz {
             c.in_range("ipc.rates_hz", r, 0.0, 100_000.0)?;
         }
@@ -347,6 +362,12 @@ impl Settings {
             "ipc.flat_messages",
             i.flat_messages,
             "must be in [1, 10000000]",
+        )?;
+        c.require(
+            (1..=1000).contains(&i.rounds),
+            "ipc.rounds",
+            i.rounds,
+            "must be in [1, 1000]",
         )?;
         c.require(
             i.warmup_messages <= 1000,

@@ -4,7 +4,7 @@
 use crate::Outcome;
 use crate::report::{BudgetCheck, SampleLog, Series, histogram_png};
 use crate::settings::{Budgets, WakeupSettings};
-use crate::stats::{Percentiles, ratio, table_header, table_row};
+use crate::stats::{Stats, columns, ratio, table_header, table_row};
 use anyhow::{Context, Result, bail};
 use runtime::executor::{Control, Cycle, Executor};
 use serde_json::json;
@@ -92,9 +92,9 @@ pub fn run(
             )?;
         }
     }
-    let ours_p: Vec<Percentiles> = ours.iter().map(|v| Percentiles::of_samples(v)).collect();
+    let ours_p: Vec<Stats> = ours.iter().map(|v| Stats::of_samples(v)).collect();
     let ours_all: Vec<u64> = ours.iter().flatten().copied().collect();
-    let ours_all_p = Percentiles::of_samples(&ours_all);
+    let ours_all_p = Stats::of_samples(&ours_all);
 
     let mut md = format!(
         "# vpsom-rt-tests wakeup\n\n{} thread(s), period {} µs (+{} µs per thread), {:.1} s, \
@@ -155,10 +155,9 @@ pub fn run(
                 cyc_samples = Vec::new();
             }
             Some((threads, cmdline)) => {
-                let cyc_p: Vec<Percentiles> =
-                    threads.iter().map(|v| Percentiles::of_samples(v)).collect();
+                let cyc_p: Vec<Stats> = threads.iter().map(|v| Stats::of_samples(v)).collect();
                 cyc_samples = threads.iter().flatten().copied().collect::<Vec<u64>>();
-                let cyc_all = Percentiles::of_samples(&cyc_samples);
+                let cyc_all = Stats::of_samples(&cyc_samples);
                 for (k, p) in cyc_p.iter().enumerate() {
                     md += &table_row(
                         &[
@@ -176,7 +175,7 @@ pub fn run(
                      |---|---|---|---|---|---|\n|"
                 );
                 let mut ratios = serde_json::Map::new();
-                for ((name, a), (_, b)) in ours_all_p.columns().iter().zip(cyc_all.columns()) {
+                for ((name, a), (_, b)) in columns(&ours_all_p).iter().zip(columns(&cyc_all)) {
                     let r = ratio(*a, b);
                     md += &format!(" {r:.2} |");
                     ratios.insert(name.to_string(), json!(r));

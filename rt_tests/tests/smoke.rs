@@ -54,7 +54,11 @@ fn smoke_writes_every_report_and_the_load_ends_with_the_harness() {
     assert!(w["results"]["ours"]["all"]["count"].as_u64().unwrap() > 1000);
     let i = json("ipc");
     let cases = i["results"]["cases"].as_array().unwrap();
-    assert_eq!(cases.len(), 16, "2 payloads × 2 modes × 2 rates × 2 layers");
+    assert_eq!(
+        cases.len(),
+        32,
+        "2 payloads × 2 modes × 2 rates × 2 fills × 2 layers"
+    );
     for c in cases {
         assert_eq!(c["lost"], 0, "{c}");
         assert_eq!(c["reordered"], 0, "{c}");

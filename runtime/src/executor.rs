@@ -26,7 +26,7 @@ use crate::config::{Checker, ConfigError};
 use crate::pool::PoolConfig;
 use crossbeam::channel::Sender;
 use hdrhistogram::Histogram;
-use serde::Deserialize;
+use serde::{Deserialize, Serialize};
 use shm_types::{DeadlineEvent, Header};
 use std::fmt;
 use std::sync::atomic::{AtomicBool, AtomicU8, AtomicU64, Ordering};
@@ -354,8 +354,14 @@ pub fn apply_sched(thread: &str, cfg: &ExecutorConfig) -> SchedReport {
     }
 }
 
+/// A latency histogram: 1 ns .. 60 s, 3 significant digits (what [`DeadlineMonitor`] records
+/// into, and what [`Stats::of_samples`] uses).
+pub fn latency_histogram() -> Histogram<u64> {
+    Histogram::new_with_bounds(1, HIST_MAX_NS, 3).expect("constant histogram bounds are valid")
+}
+
 /// Percentiles of one histogram, nanoseconds.
-#[derive(Debug, Clone, Copy, Default, PartialEq)]
+#[derive(Debug, Clone, Copy, Default, PartialEq, Serialize)]
 pub struct Stats {
     /// Samples.
     pub count: u64,
@@ -365,6 +371,8 @@ pub struct Stats {
     pub mean: f64,
     /// Median.
     pub p50: u64,
+    /// 90th percentile.
+    pub p90: u64,
     /// 99th percentile.
     pub p99: u64,
     /// 99.9th percentile.
@@ -374,7 +382,7 @@ pub struct Stats {
 }
 
 impl Stats {
-    /// Percentiles of `h`.
+    /// Percentiles of `h` (all zero if it is empty).
     pub fn of(h: &Histogram<u64>) -> Self {
         if h.is_empty() {
             return Self::default();
@@ -384,10 +392,21 @@ impl Stats {
             min: h.min(),
             mean: h.mean(),
             p50: h.value_at_quantile(0.5),
+            p90: h.value_at_quantile(0.9),
             p99: h.value_at_quantile(0.99),
             p999: h.value_at_quantile(0.999),
             max: h.max(),
         }
+    }
+
+    /// Percentiles of raw samples, ns, through a [`latency_histogram`] (0 counts as 1 ns,
+    /// beyond 60 s as 60 s).
+    pub fn of_samples(samples: &[u64]) -> Self {
+        let mut h = latency_histogram();
+        for &s in samples {
+            h.saturating_record(s.max(1));
+        }
+        Self::of(&h)
     }
 }
 
@@ -440,17 +459,13 @@ const HIST_MAX_NS: u64 = 60_000_000_000;
 impl DeadlineMonitor {
     /// A monitor for a thread with this period and budget (ns); `escalate_after` 0 = never.
     pub fn new(thread: &str, period_ns: u64, budget_ns: u64, escalate_after: u32) -> Self {
-        let hist = || {
-            Histogram::new_with_bounds(1, HIST_MAX_NS, 3)
-                .expect("constant histogram bounds are valid")
-        };
         Self {
             thread: thread.to_string(),
             period_ns,
             budget_ns,
             escalate_after,
-            lateness: hist(),
-            exec: hist(),
+            lateness: latency_histogram(),
+            exec: latency_histogram(),
             cycles: 0,
             misses: 0,
             consecutive: 0,
@@ -994,6 +1009,30 @@ mod tests {
         assert_eq!(e.exec_ns, 900);
         assert_eq!((e.missed, e.cycle, e.header.seq), (1, 7, 8));
         assert_eq!(e.thread_name(), "t");
+    }
+
+    #[test]
+    fn stats_of_one_to_thousand_samples() {
+        let samples: Vec<u64> = (1..=1000).map(|k| k * 1000).collect();
+        let p = Stats::of_samples(&samples);
+        assert_eq!(p.count, 1000);
+        assert_eq!(p.min, 1000);
+        // 3 significant digits: values are exact to within 0.1%.
+        for (got, want) in [
+            (p.p50, 500_000),
+            (p.p90, 900_000),
+            (p.p99, 990_000),
+            (p.p999, 999_000),
+            (p.max, 1_000_000),
+        ] {
+            assert!(
+                (got as f64 - want as f64).abs() <= want as f64 * 1e-3,
+                "{got} {want}"
+            );
+        }
+        assert!((p.mean - 500_500.0).abs() <= 500.0, "{}", p.mean);
+        assert_eq!(Stats::of_samples(&[]), Stats::default());
+        assert_eq!(Stats::of_samples(&[0]).min, 1, "0 ns counts as 1 ns");
     }
 
     #[test]

@@ -7,7 +7,9 @@
 //! timeout instead of polling.
 //!
 //! Zero copy: [`Publisher::loan`] hands out a sample that lives in shared memory and has been
-//! zero-filled **in place** (a `DepthFrame` is 600 KB; it is never built on the stack); the
+//! zero-filled **in place** (a `DepthFrame` is 600 KB; it is never built on the stack), or, for
+//! [`AnyBitPattern`] messages whose producer overwrites everything it publishes,
+//! [`Publisher::loan_reused`] hands it out as it is (an earlier sample's bytes, no fill); the
 //! caller fills it through `DerefMut` and calls [`Loan::send`], which stamps the [`Header`]
 //! (per-publisher sequence number starting at 1, caller's time stamps). A subscriber reads the
 //! same memory through a borrowed [`Received`] sample (`Deref<Target = T>`).
@@ -31,12 +33,14 @@ use iceoryx2::prelude::{
 };
 use iceoryx2::sample::Sample;
 use iceoryx2::sample_mut::SampleMut;
+use iceoryx2::sample_mut_uninit::SampleMutUninit;
 use iceoryx2::service::port_factory::{event, publish_subscribe};
 use serde::Deserialize;
-use shm_types::{Header, Message};
+use shm_types::{AnyBitPattern, Header, Message};
 use std::cell::Cell;
 use std::collections::BTreeMap;
 use std::fmt;
+use std::mem::MaybeUninit;
 use std::ops::{Deref, DerefMut};
 use std::time::{Duration, Instant};
 
@@ -59,98 +63,85 @@ pub enum Overflow {
     Discard,
 }
 
-/// Settings of one topic's services (the `[ports]` defaults merged with a per-topic override).
-#[derive(Debug, Clone, Copy, PartialEq, Eq)]
-pub struct TopicSettings {
-    /// Samples a late-joining subscriber receives on connection.
-    pub history_size: usize,
-    /// Unread samples a subscriber can buffer.
-    pub subscriber_buffer: usize,
-    /// Samples a subscriber can hold borrowed at once.
-    pub subscriber_max_borrowed: usize,
-    /// Samples a publisher can hold loaned at once.
-    pub publisher_max_loaned: usize,
-    /// Publishers per topic.
-    pub max_publishers: usize,
-    /// Subscribers per topic.
-    pub max_subscribers: usize,
-    /// Nodes (processes) that may open the topic.
-    pub max_nodes: usize,
-    /// Full-buffer behaviour.
-    pub overflow: Overflow,
-    /// With [`Overflow::Block`]: give up after this long (ms).
-    pub block_timeout_ms: u64,
-}
-
-/// A per-topic override in `[ports.topics.<topic>]`; every key is optional.
-#[derive(Debug, Clone, Default, PartialEq, Eq, Deserialize)]
-#[serde(deny_unknown_fields, default)]
-pub struct TopicOverride {
-    /// See [`TopicSettings::history_size`].
-    pub history_size: Option<usize>,
-    /// See [`TopicSettings::subscriber_buffer`].
-    pub subscriber_buffer: Option<usize>,
-    /// See [`TopicSettings::subscriber_max_borrowed`].
-    pub subscriber_max_borrowed: Option<usize>,
-    /// See [`TopicSettings::publisher_max_loaned`].
-    pub publisher_max_loaned: Option<usize>,
-    /// See [`TopicSettings::max_publishers`].
-    pub max_publishers: Option<usize>,
-    /// See [`TopicSettings::max_subscribers`].
-    pub max_subscribers: Option<usize>,
-    /// See [`TopicSettings::max_nodes`].
-    pub max_nodes: Option<usize>,
-    /// See [`TopicSettings::overflow`].
-    pub overflow: Option<Overflow>,
-    /// See [`TopicSettings::block_timeout_ms`].
-    pub block_timeout_ms: Option<u64>,
-}
-
-/// `[ports]` section: iceoryx2 service settings shared by every topic, plus per-topic overrides.
-#[derive(Debug, Clone, PartialEq, Eq, Deserialize)]
-#[serde(deny_unknown_fields, default)]
-pub struct PortsConfig {
-    /// Middle part of every service name, `vpsom/<namespace>/<topic>`: runs with different
-    /// namespaces never collide. `[A-Za-z0-9_-]`, 1..=48 characters.
-    pub namespace: String,
-    /// See [`TopicSettings::history_size`].
-    pub history_size: usize,
-    /// See [`TopicSettings::subscriber_buffer`].
-    pub subscriber_buffer: usize,
-    /// See [`TopicSettings::subscriber_max_borrowed`].
-    pub subscriber_max_borrowed: usize,
-    /// See [`TopicSettings::publisher_max_loaned`].
-    pub publisher_max_loaned: usize,
-    /// See [`TopicSettings::max_publishers`].
-    pub max_publishers: usize,
-    /// See [`TopicSettings::max_subscribers`].
-    pub max_subscribers: usize,
-    /// See [`TopicSettings::max_nodes`].
-    pub max_nodes: usize,
-    /// See [`TopicSettings::overflow`].
-    pub overflow: Overflow,
-    /// See [`TopicSettings::block_timeout_ms`].
-    pub block_timeout_ms: u64,
-    /// Per-topic overrides, keyed by topic name.
-    pub topics: BTreeMap<String, TopicOverride>,
-}
-
-impl Default for PortsConfig {
-    fn default() -> Self {
-        Self {
-            namespace: "main".into(),
-            history_size: 0,
-            subscriber_buffer: 2,
-            subscriber_max_borrowed: 2,
-            publisher_max_loaned: 2,
-            max_publishers: 2,
-            max_subscribers: 8,
-            max_nodes: 16,
-            overflow: Overflow::Overwrite,
-            block_timeout_ms: 1000,
-            topics: BTreeMap::new(),
+/// Declares every per-topic service setting once, as `field: type = built-in default`, and
+/// derives from that list [`TopicSettings`] (resolved values), [`TopicOverride`] (the same keys,
+/// each optional), [`PortsConfig`] (`namespace`, the same keys as every topic's defaults, and
+/// `topics`), `PortsConfig::default()` and the merge `PortsConfig::settings_with`.
+macro_rules! topic_settings {
+    ($( $(#[doc = $doc:literal])+ $field:ident: $ty:ty = $default:expr, )+) => {
+        /// Settings of one topic's services (the `[ports]` defaults merged with a per-topic
+        /// override).
+        #[derive(Debug, Clone, Copy, PartialEq, Eq)]
+        pub struct TopicSettings {
+            $( $(#[doc = $doc])+ pub $field: $ty, )+
         }
-    }
+
+        /// A per-topic override in `[ports.topics.<topic>]`; every key is optional.
+        #[derive(Debug, Clone, Default, PartialEq, Eq, Deserialize)]
+        #[serde(deny_unknown_fields, default)]
+        pub struct TopicOverride {
+            $(
+                #[doc = concat!("See [`TopicSettings::", stringify!($field), "`].")]
+                pub $field: Option<$ty>,
+            )+
+        }
+
+        /// `[ports]` section: iceoryx2 service settings shared by every topic, plus per-topic
+        /// overrides.
+        #[derive(Debug, Clone, PartialEq, Eq, Deserialize)]
+        #[serde(deny_unknown_fields, default)]
+        pub struct PortsConfig {
+            /// Middle part of every service name, `vpsom/<namespace>/<topic>`: runs with
+            /// different namespaces never collide. `[A-Za-z0-9_-]`, 1..=48 characters.
+            pub namespace: String,
+            $(
+                #[doc = concat!("See [`TopicSettings::", stringify!($field), "`].")]
+                pub $field: $ty,
+            )+
+            /// Per-topic overrides, keyed by topic name.
+            pub topics: BTreeMap<String, TopicOverride>,
+        }
+
+        impl Default for PortsConfig {
+            fn default() -> Self {
+                Self {
+                    namespace: "main".into(),
+                    $( $field: $default, )+
+                    topics: BTreeMap::new(),
+                }
+            }
+        }
+
+        impl PortsConfig {
+            /// The defaults merged with `o`.
+            fn settings_with(&self, o: &TopicOverride) -> TopicSettings {
+                TopicSettings {
+                    $( $field: o.$field.unwrap_or(self.$field), )+
+                }
+            }
+        }
+    };
+}
+
+topic_settings! {
+    /// Samples a late-joining subscriber receives on connection.
+    history_size: usize = 0,
+    /// Unread samples a subscriber can buffer.
+    subscriber_buffer: usize = 2,
+    /// Samples a subscriber can hold borrowed at once.
+    subscriber_max_borrowed: usize = 2,
+    /// Samples a publisher can hold loaned at once.
+    publisher_max_loaned: usize = 2,
+    /// Publishers per topic.
+    max_publishers: usize = 2,
+    /// Subscribers per topic.
+    max_subscribers: usize = 8,
+    /// Nodes (processes) that may open the topic.
+    max_nodes: usize = 16,
+    /// Full-buffer behaviour.
+    overflow: Overflow = Overflow::Overwrite,
+    /// With [`Overflow::Block`]: give up after this long (ms).
+    block_timeout_ms: u64 = 1000,
 }
 
 impl PortsConfig {
@@ -202,22 +193,6 @@ impl PortsConfig {
         match self.topics.get(topic) {
             Some(o) => self.settings_with(o),
             None => self.settings_with(&TopicOverride::default()),
-        }
-    }
-
-    fn settings_with(&self, o: &TopicOverride) -> TopicSettings {
-        TopicSettings {
-            history_size: o.history_size.unwrap_or(self.history_size),
-            subscriber_buffer: o.subscriber_buffer.unwrap_or(self.subscriber_buffer),
-            subscriber_max_borrowed: o
-                .subscriber_max_borrowed
-                .unwrap_or(self.subscriber_max_borrowed),
-            publisher_max_loaned: o.publisher_max_loaned.unwrap_or(self.publisher_max_loaned),
-            max_publishers: o.max_publishers.unwrap_or(self.max_publishers),
-            max_subscribers: o.max_subscribers.unwrap_or(self.max_subscribers),
-            max_nodes: o.max_nodes.unwrap_or(self.max_nodes),
-            overflow: o.overflow.unwrap_or(self.overflow),
-            block_timeout_ms: o.block_timeout_ms.unwrap_or(self.block_timeout_ms),
         }
     }
 }
@@ -592,13 +567,16 @@ impl<T: Message> Publisher<T> {
     /// A zero-filled sample in shared memory for the caller to fill in place, then
     /// [`Loan::send`]. Dropping the loan without sending returns the memory.
     pub fn loan(&self) -> Result<Loan<'_, T>, PortError> {
-        let uninit = self.port.loan_uninit().map_err(|e| PortError::Loan {
+        Ok(Loan {
+            sample: shm_types::init_zeroed(self.loan_uninit()?),
+            publisher: self,
+        })
+    }
+
+    fn loan_uninit(&self) -> Result<SampleMutUninit<ipc::Service, MaybeUninit<T>, ()>, PortError> {
+        self.port.loan_uninit().map_err(|e| PortError::Loan {
             service: self.services.name.clone(),
             reason: e.to_string(),
-        })?;
-        Ok(Loan {
-            sample: shm_types::init_zeroed(uninit),
-            publisher: self,
         })
     }
 
@@ -626,7 +604,24 @@ impl<T: Message> Publisher<T> {
     }
 }
 
-/// A loaned, zero-initialised sample being filled by the producer. `DerefMut<Target = T>`.
+impl<T: Message + AnyBitPattern> Publisher<T> {
+    /// Like [`Publisher::loan`] but **not** zero-filled: the sample holds whatever its slot of
+    /// this publisher's shared memory last held, i.e. an earlier sample of this topic (possibly
+    /// a partly written one that was dropped unsent) or zeros. For producers that overwrite every
+    /// field they publish: it saves the fill (600 KB for a `DepthFrame`). Whatever the producer
+    /// leaves unwritten is stale, so write every field a consumer reads — e.g. all
+    /// `width × height` pixels; entries beyond the used part of an array may stay stale only if
+    /// consumers never read them.
+    pub fn loan_reused(&self) -> Result<Loan<'_, T>, PortError> {
+        Ok(Loan {
+            sample: shm_types::init_reused(self.loan_uninit()?),
+            publisher: self,
+        })
+    }
+}
+
+/// A loaned sample being filled by the producer (zero-filled, or stale with
+/// [`Publisher::loan_reused`]). `DerefMut<Target = T>`.
 pub struct Loan<'p, T: Message> {
     sample: SampleMut<ipc::Service, T, ()>,
     publisher: &'p Publisher<T>,
@@ -841,7 +836,7 @@ impl<T: Message> Subscriber<T> {
 #[cfg(test)]
 mod tests {
     use super::*;
-    use shm_types::NeckGoal;
+    use shm_types::{DepthFrame, NeckGoal};
 
     fn unique_ns(tag: &str) -> String {
         format!(
@@ -902,6 +897,57 @@ mod tests {
             "latest() received seq 2 and dropped it: no gap"
         );
         assert!(sub.receive().unwrap().is_none());
+    }
+
+    /// Frame `k` as the test writes it: `width = k`, the first `k` pixels `= k`, `sim_ns = k`.
+    fn is_frame_k(f: &DepthFrame, k: u64) -> bool {
+        f.width as u64 == k
+            && f.height == u32::from(k > 0)
+            && f.header.sim_time_ns == k
+            && f.pixels().iter().all(|&p| u64::from(p) == k)
+    }
+
+    #[test]
+    fn loan_reused_hands_out_a_previous_sample_or_zeros_and_sends() {
+        let cfg = PortsConfig {
+            subscriber_buffer: 1,
+            subscriber_max_borrowed: 1,
+            publisher_max_loaned: 1,
+            max_subscribers: 1,
+            ..PortsConfig::default()
+        };
+        let ctx = PortContext::with_namespace(&cfg, "unit", &unique_ns("reuse")).unwrap();
+        let sub = ctx.subscriber::<DepthFrame>("depth").unwrap();
+        let publ = ctx.publisher::<DepthFrame>("depth").unwrap();
+        // More rounds than the data segment has slots, so some slot is handed out again.
+        let rounds = 64u64;
+        let mut stale = 0;
+        for k in 1..=rounds {
+            let mut f = publ.loan_reused().unwrap();
+            let before = f.header.seq;
+            assert!(
+                before < k && is_frame_k(&f, before),
+                "round {k}: not zeros and not an earlier frame (seq {before}, width {})",
+                f.width
+            );
+            stale += u64::from(before > 0);
+            f.width = k as u32;
+            f.height = 1;
+            f.pixels_mut().fill(k as u16);
+            let sent = f
+                .send(Stamp {
+                    source_ns: 0,
+                    sim_ns: k,
+                })
+                .unwrap();
+            assert_eq!(sent.seq, k);
+            let got = sub.receive().unwrap().unwrap();
+            assert!(is_frame_k(&got, k), "round {k}: received a different frame");
+        }
+        assert!(stale > 0, "no slot was reused in {rounds} rounds");
+        // The zero-filling loan still clears a slot that held a frame.
+        let f = publ.loan().unwrap();
+        assert!(is_frame_k(&f, 0) && f.header.seq == 0 && f.depth_mm.iter().all(|&p| p == 0));
     }
 
     #[test]

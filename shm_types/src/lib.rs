@@ -14,7 +14,9 @@
 //! Every type implements [`Validate`], which rejects NaN/inf and out-of-range counts, and
 //! [`ZeroValid`], which states that all-zero bytes are a valid value (so a loaned sample can be
 //! zero-filled in place and then written field by field, and lockstep hosts can heap-allocate one
-//! with [`boxed_zeroed`] without building it on the stack).
+//! with [`boxed_zeroed`] without building it on the stack). The large frame types also implement
+//! [`AnyBitPattern`], which lets a producer that overwrites every field it publishes skip that
+//! fill ([`init_reused`]).
 
 mod classes;
 mod message;
@@ -22,7 +24,7 @@ mod messages;
 mod validate;
 
 pub use classes::{COCO_CLASSES, ClassId, class_id, class_name, is_background_class};
-pub use message::{Message, init_zeroed};
+pub use message::{Message, init_reused, init_zeroed};
 pub use messages::*;
 pub use validate::{Validate, ValidationError};
 
@@ -34,6 +36,17 @@ use iceoryx2::prelude::ZeroCopySend;
 /// Implement only for `#[repr(C)]` types built from integers, floats, `bool`s and arrays/structs of
 /// such types (no references, no `NonZero*`, no enums with a niche at zero).
 pub unsafe trait ZeroValid: Sized + ZeroCopySend {}
+
+/// Marker for payloads for which **every** bit pattern of `size_of::<Self>()` initialised bytes
+/// is a valid value (not only all zeros), so memory that held an earlier value of the same type
+/// may be handed out as a `Self` without being cleared first ([`init_reused`]).
+///
+/// # Safety
+/// Implement only for `#[repr(C)]` types made solely of integers, floats and arrays/structs of
+/// such types: no `bool`, `char`, enums, references, raw or function pointers, `NonZero*`, nor
+/// anything with a niche or a `Drop`. Padding bytes are allowed (a field is never read from
+/// another field's padding as long as the memory is only ever written as `Self`).
+pub unsafe trait AnyBitPattern: ZeroValid {}
 
 /// A heap-allocated, zero-initialised `T`, built without a stack temporary (a `DepthFrame` is
 /// ~1 MB). Used by in-process (lockstep) hosting and by tests.

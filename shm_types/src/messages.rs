@@ -2,7 +2,7 @@
 //! that differ between targets (sizes are pinned by tests at the bottom of this file).
 
 use crate::validate::{Checker, Validate, ValidationError};
-use crate::{ClassId, ZeroValid};
+use crate::{AnyBitPattern, ClassId, ZeroValid};
 use iceoryx2::prelude::ZeroCopySend;
 
 /// Largest depth image: 640 × 480 (the paper's Kinect v2 is 512 × 424; smaller sizes by config).
@@ -827,6 +827,15 @@ zero_valid!(
     Candidate,
     PlannerDecision
 );
+
+// SAFETY: `DepthFrame` is `#[repr(C)]` of a `Header` (three `u64`), `u32`s, `Intrinsics` (six
+// `f32`), `Pose3` (seven `f32`) and a `u16` array; `Detections` of a `Header`, a `u64`, `u32`s,
+// an array of `Detection` (`u16`s, an `f32`, a `u16` array, a `u32`) and a `u8` array. Integers
+// and floats accept every bit pattern (a stale float may be NaN, which is a valid `f32`); there
+// are no `bool`s, enums, pointers or niches.
+unsafe impl AnyBitPattern for DepthFrame {}
+// SAFETY: see `DepthFrame` above.
+unsafe impl AnyBitPattern for Detections {}
 
 #[cfg(test)]
 mod tests {

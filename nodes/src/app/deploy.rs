@@ -177,8 +177,13 @@ pub fn sim_node(args: &RunArgs, cfg: &Config) -> anyhow::Result<()> {
                     }
                     let t = sim.time_ns();
                     if t >= next_cam {
-                        let mut frame = depth.loan()?;
-                        let mut det = dets.loan()?;
+                        // No zero-fill (600 KB + 300 KB a frame): `render` overwrites every
+                        // field of both and all `width × height` pixels and labels (items past
+                        // `count` too); the array tails beyond `width × height` may hold an
+                        // earlier frame's data (the size is fixed per run, so in practice
+                        // zeros), which consumers never read (`pixels()`, `label_pixels()`).
+                        let mut frame = depth.loan_reused()?;
+                        let mut det = dets.loan_reused()?;
                         sim.render(&mut frame, &mut det, t);
                         let sent = frame.send(Stamp {
                             source_ns: now(&clock),
