@@ -8,29 +8,51 @@
 //!   make the end `NoCandidates`.
 //! - [`FrontierPlanner`]: Yamauchi frontier exploration (see [`crate::planner::frontier`]),
 //!   neck fixed forward (yaw 0); ends (`Terminated`) when no reachable frontier remains.
+//!
+//! Both trace every chassis goal like VP-SOM traces its GBV ([`ViewPlanner::take_decision`], kind
+//! GBV): one candidate, flagged chosen, evaluated with VP-SOM's GBV terms and weights on the map
+//! of the round that chose it: the coverage waypoint's view with the camera on the cluster
+//! centre (f_c for that cluster), the frontier goal's view with the neck forward (no f_c). So
+//! per-NBV metrics (non-occlusion: H_IoU and objects in view) are computed the same way for all
+//! three planners. Bootstrap frontier goals (VP-SOM's and coverage's) are not NBVs and carry
+//! none.
 
 use crate::config::CameraConfig;
-use crate::geom::{CameraMount, wrap_angle};
+use crate::geom::CameraMount;
 use crate::planner::clusters::{self, ClusterInfo};
 use crate::planner::config::{PlannerConfig, PlannerKind};
-use crate::planner::coverage::{CoverageJob, CoverageParams};
+use crate::planner::coverage::{CoverageJob, CoverageParams, aim_neck};
+use crate::planner::evaluate::{EvalParams, Scoring, Weights};
 use crate::planner::reach::NavParams;
 use crate::planner::session::{
     Back, JobOutput, LookAround, Outcome, PlannerInputs, PlannerJob, PlannerStatus, Session, Step,
-    Summary, ViewPlanner, neck_goal_for,
+    Summary, ViewPlanner, chosen_decision, neck_goal_for,
 };
-use shm_types::{NeckGoal, ObjectMap, RobotState, goal_kind};
+use shm_types::{Candidate, NeckGoal, ObjectMap, PlannerDecision, RobotState, goal_kind};
 use std::collections::VecDeque;
+
+/// How the baselines evaluate the views they choose: VP-SOM's GBV terms and weights.
+fn scoring_params(cfg: &PlannerConfig, camera: &CameraConfig) -> (EvalParams, Weights) {
+    let weights = Weights {
+        alpha: cfg.gbv.alpha,
+        beta: cfg.gbv.beta,
+    };
+    (EvalParams::new(cfg, camera), weights)
+}
 
 /// All-views coverage baseline.
 #[derive(Debug)]
 pub struct CoveragePlanner {
     eps_sopm: f32,
     params: CoverageParams,
+    scoring: (EvalParams, Weights),
     mount: CameraMount,
     session: Session,
     look: LookAround,
-    queue: VecDeque<[f32; 3]>,
+    /// Waypoints left on the current circle, with their views.
+    queue: VecDeque<([f32; 3], Candidate)>,
+    /// `header.seq` of the map the circle was planned on.
+    circle_map_seq: u64,
     current: Option<ClusterInfo>,
     circled: Vec<i32>,
     exploring: bool,
@@ -49,6 +71,7 @@ impl CoveragePlanner {
                 safe_distance: cfg.gbv.safe_distance,
                 nav: NavParams::new(cfg),
             },
+            scoring: scoring_params(cfg, camera),
             mount: camera.mount,
             session,
             look: LookAround::new(
@@ -56,6 +79,7 @@ impl CoveragePlanner {
                 cfg.bootstrap.neck_tolerance_deg.to_radians(),
             ),
             queue: VecDeque::new(),
+            circle_map_seq: 0,
             current: None,
             circled: Vec::with_capacity(shm_types::MAX_OBJECTS),
             exploring: false,
@@ -72,8 +96,9 @@ impl CoveragePlanner {
     }
 
     fn next_waypoint(&mut self, now_ns: u64) -> Option<Step> {
-        let w = self.queue.pop_front()?;
+        let (w, view) = self.queue.pop_front()?;
         let id = self.current.map_or(-1, |c| c.id);
+        self.session.decision = Some(chosen_decision(view, id, self.circle_map_seq));
         Some(Step::Goal(self.session.goals.issue(
             w,
             0.0,
@@ -123,11 +148,17 @@ impl ViewPlanner for CoveragePlanner {
         if open.is_empty() {
             return self.finish(now_ns);
         }
+        let (params, weights) = self.scoring;
         let job = CoverageJob {
             nav: self.session.buffers.nav(inputs.nav),
             base: inputs.state.base_pose,
             clusters: open,
             params: self.params,
+            scoring: Scoring {
+                map: self.session.buffers.map(inputs.map),
+                params,
+                weights,
+            },
         };
         self.session.compute(PlannerJob::Coverage(job))
     }
@@ -141,11 +172,13 @@ impl ViewPlanner for CoveragePlanner {
             other => return self.session.discard(other),
         };
         self.session.buffers.put_nav(r.nav);
+        self.circle_map_seq = r.scoring.map.header.seq;
+        self.session.buffers.put_map(r.scoring.map);
         self.session.given_up.extend(r.unreachable);
         match r.circle {
-            Some((info, wps)) => {
-                self.current = Some(info);
-                self.queue = wps.into();
+            Some(c) => {
+                self.current = Some(c.cluster);
+                self.queue = c.waypoints.into_iter().zip(c.views).collect();
                 self.next_waypoint(now_ns).unwrap_or(Step::Wait)
             }
             None => self.finish(now_ns),
@@ -165,11 +198,7 @@ impl ViewPlanner for CoveragePlanner {
             .map(|c| c.center)
         });
         goal.yaw = match centre {
-            Some(c) => {
-                let cam = self.mount.camera_pose(state.base_pose, 0.0, goal.pitch);
-                let d = c - glam::Vec3::from(cam.translation);
-                wrap_angle(d.y.atan2(d.x) - state.base_pose[2])
-            }
+            Some(c) => aim_neck(&self.mount, state.base_pose, c),
             None => self.look.target(state.neck_yaw),
         };
         goal
@@ -181,6 +210,10 @@ impl ViewPlanner for CoveragePlanner {
 
     fn summary(&self) -> Summary {
         self.session.summary()
+    }
+
+    fn take_decision(&mut self) -> Option<Box<PlannerDecision>> {
+        self.session.take_decision()
     }
 }
 
@@ -194,9 +227,12 @@ pub struct FrontierPlanner {
 impl FrontierPlanner {
     /// A planner from the configuration.
     pub fn new(cfg: &PlannerConfig, camera: &CameraConfig) -> Self {
+        let mut session = Session::new(PlannerKind::Frontier, cfg, 0);
+        // Its frontier goals are its NBVs: evaluate their views like VP-SOM's.
+        session.score_frontiers = Some(scoring_params(cfg, camera));
         Self {
             mount: camera.mount,
-            session: Session::new(PlannerKind::Frontier, cfg, 0),
+            session,
         }
     }
 }
@@ -233,5 +269,9 @@ impl ViewPlanner for FrontierPlanner {
 
     fn summary(&self) -> Summary {
         self.session.summary()
+    }
+
+    fn take_decision(&mut self) -> Option<Box<PlannerDecision>> {
+        self.session.take_decision()
     }
 }

@@ -4,11 +4,16 @@
 //! Waypoints: `waypoints` evenly on the ring, starting at the robot's bearing from the centre and
 //! going counter-clockwise, plus the start again to close the circle; the base yaw is the
 //! direction of travel (tangent). Waypoints in collision or unreachable from the robot are
-//! skipped; a cluster without any reachable waypoint is skipped as a whole.
+//! skipped; a cluster without any reachable waypoint is skipped as a whole. Each waypoint's view
+//! (camera aimed at the cluster centre, [`aim_neck`]) is evaluated with VP-SOM's terms on the
+//! round's map, for the trace and the per-NBV metrics.
 
-use crate::planner::clusters::ClusterInfo;
+use crate::geom::{CameraMount, wrap_angle};
+use crate::planner::clusters::{ClusterInfo, unfinished_centroid};
+use crate::planner::evaluate::{Scoring, Target};
 use crate::planner::reach::NavParams;
-use shm_types::OccupancyGrid;
+use glam::Vec3;
+use shm_types::{Candidate, OccupancyGrid};
 use std::f32::consts::{FRAC_PI_2, TAU};
 
 /// Parameters of the coverage baseline.
@@ -36,6 +41,13 @@ pub fn circle(info: &ClusterInfo, p: &CoverageParams, from: [f32; 2]) -> Vec<[f3
         .collect()
 }
 
+/// The neck yaw (relative to the base) that points the camera at `centre` from base pose `base`.
+pub fn aim_neck(mount: &CameraMount, base: [f32; 3], centre: Vec3) -> f32 {
+    let cam = mount.camera_pose(base, 0.0, mount.pitch());
+    let d = centre - Vec3::from(cam.translation);
+    wrap_angle(d.y.atan2(d.x) - base[2])
+}
+
 /// Plan the circle of the first cluster (in order) with a reachable waypoint, as an owned job.
 #[derive(Debug)]
 pub struct CoverageJob {
@@ -47,17 +59,33 @@ pub struct CoverageJob {
     pub clusters: Vec<ClusterInfo>,
     /// Parameters.
     pub params: CoverageParams,
+    /// Map snapshot and parameters to evaluate the waypoints' views with.
+    pub scoring: Scoring,
+}
+
+/// A planned circle.
+#[derive(Debug, Clone)]
+pub struct Circle {
+    /// The cluster circled.
+    pub cluster: ClusterInfo,
+    /// Reachable waypoints `[x, y, yaw]`, in driving order.
+    pub waypoints: Vec<[f32; 3]>,
+    /// The view at each waypoint (camera on the cluster centre), evaluated on the round's map
+    /// with the cluster as f_c target.
+    pub views: Vec<Candidate>,
 }
 
 /// Outcome of a [`CoverageJob`].
 #[derive(Debug)]
 pub struct CoverageResult {
     /// The cluster to circle and its reachable waypoints, `None` if no cluster has any.
-    pub circle: Option<(ClusterInfo, Vec<[f32; 3]>)>,
+    pub circle: Option<Circle>,
     /// Clusters tried before it (or all) without a reachable waypoint.
     pub unreachable: Vec<i32>,
     /// Buffer handed back for reuse.
     pub nav: Box<OccupancyGrid>,
+    /// Handed back for reuse.
+    pub scoring: Scoring,
 }
 
 impl CoverageJob {
@@ -74,15 +102,30 @@ impl CoverageJob {
                 .collect();
             if wps.is_empty() {
                 unreachable.push(info.id);
-            } else {
-                found = Some((*info, wps));
-                break;
+                continue;
             }
+            let sc = &self.scoring;
+            let target = Target {
+                cluster_id: info.id,
+                centroid: unfinished_centroid(&sc.map, info, sc.params.eps_sopm),
+            };
+            let mount = sc.params.mount;
+            let views = wps
+                .iter()
+                .map(|w| sc.chosen(*w, aim_neck(&mount, *w, info.center), Some(&target)))
+                .collect();
+            found = Some(Circle {
+                cluster: *info,
+                waypoints: wps,
+                views,
+            });
+            break;
         }
         CoverageResult {
             circle: found,
             unreachable,
             nav: self.nav,
+            scoring: self.scoring,
         }
     }
 }

@@ -247,6 +247,32 @@ pub fn candidate(view: &View, a: &AbundanceTerms, c: &ContinuityTerms, w: Weight
     }
 }
 
+/// What a baseline planner needs to evaluate the views it chooses with the same F(v) terms as
+/// VP-SOM (so that per-NBV metrics such as non-occlusion compare like with like): a map snapshot
+/// and the parameters. Jobs carry it so the evaluation runs off the real-time thread, and hand
+/// it back for reuse.
+#[derive(Debug)]
+pub struct Scoring {
+    /// Map snapshot of the round.
+    pub map: Box<ObjectMap>,
+    /// Evaluation parameters.
+    pub params: EvalParams,
+    /// α, β (the GBV's).
+    pub weights: Weights,
+}
+
+impl Scoring {
+    /// The candidate of the camera pose a base at `base` with the neck at `neck_yaw` (mount
+    /// pitch) gives, flagged as chosen; f_c is computed for `target` (0 without one).
+    pub fn chosen(&self, base: [f32; 3], neck_yaw: f32, target: Option<&Target>) -> Candidate {
+        let m = self.params.mount;
+        let pose = m.camera_pose(base, neck_yaw, m.pitch());
+        let mut c = evaluate_view(&self.map, &pose, target, self.weights, &self.params);
+        c.chosen = 1;
+        c
+    }
+}
+
 /// For views that share one camera position (the neck turns about a vertical axis through the
 /// optical centre's column, so all LBV candidates of a base pose do): the offsets `p − camera`
 /// of the tracked cluster's sample points that pass the co-visibility angle test from there

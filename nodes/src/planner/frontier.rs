@@ -9,8 +9,9 @@
 //!
 //! Used by the frontier baseline and by VP-SOM/coverage to explore before any cluster is known.
 
+use crate::planner::evaluate::Scoring;
 use crate::planner::reach::{NavMap, NavParams};
-use shm_types::{OccupancyGrid, grid_cell};
+use shm_types::{Candidate, OccupancyGrid, grid_cell};
 
 /// Parameters of frontier selection.
 #[derive(Debug, Clone, Copy, PartialEq)]
@@ -180,6 +181,8 @@ pub struct FrontierJob {
     pub blacklist: Vec<[f32; 2]>,
     /// Parameters.
     pub params: FrontierParams,
+    /// Evaluate the goal's view (neck forward) for the trace, if given (the frontier baseline).
+    pub scoring: Option<Scoring>,
 }
 
 /// Outcome of a [`FrontierJob`].
@@ -193,6 +196,10 @@ pub struct FrontierResult {
     pub explore: Box<OccupancyGrid>,
     /// Buffers handed back for reuse.
     pub nav: Box<OccupancyGrid>,
+    /// The goal's view evaluated with the job's scoring (no tracked cluster), if both exist.
+    pub view: Option<Candidate>,
+    /// The scoring, handed back for reuse.
+    pub scoring: Option<Scoring>,
 }
 
 impl FrontierJob {
@@ -202,11 +209,16 @@ impl FrontierJob {
         let fronts = frontiers(&self.explore, &self.blacklist, &p);
         let nav = p.nav.flooded(&self.nav, [self.base[0], self.base[1]]);
         let goal = choose(&self.explore, &fronts, &nav, self.base);
+        let view = goal
+            .zip(self.scoring.as_ref())
+            .map(|((pose, _), s)| s.chosen(pose, 0.0, None));
         FrontierResult {
             goal,
             frontiers: fronts.len(),
             explore: self.explore,
             nav: self.nav,
+            view,
+            scoring: self.scoring,
         }
     }
 }

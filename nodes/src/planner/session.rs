@@ -5,11 +5,12 @@
 use crate::planner::clusters::{self, SideTracker};
 use crate::planner::config::{PlannerConfig, PlannerKind};
 use crate::planner::coverage::{CoverageJob, CoverageResult};
+use crate::planner::evaluate::{EvalParams, Scoring, Weights};
 use crate::planner::frontier::{FrontierJob, FrontierParams, FrontierResult};
 use crate::planner::gbv::{GbvJob, GbvResult};
 use shm_types::{
-    NavGoal, NeckGoal, ObjectMap, OccupancyGrid, PlannerDecision, RobotState, boxed_zeroed,
-    goal_kind, nav_status, planner_state,
+    Candidate, NavGoal, NeckGoal, ObjectMap, OccupancyGrid, PlannerDecision, RobotState,
+    boxed_zeroed, decision_kind, goal_kind, nav_status, planner_state,
 };
 use std::fmt;
 
@@ -381,6 +382,10 @@ pub(crate) struct Session {
     pub(crate) given_up: Vec<i32>,
     /// Overrides the map-derived `clusters_done` (coverage: clusters circled).
     pub(crate) clusters_done: Option<u32>,
+    /// Evaluate the view of every frontier goal (the frontier baseline, whose NBVs they are).
+    pub(crate) score_frontiers: Option<(EvalParams, Weights)>,
+    /// The trace of the newest chassis-goal decision, until the host takes it.
+    pub(crate) decision: Option<Box<PlannerDecision>>,
     blacklist: Vec<[f32; 2]>,
     pending: bool,
     status: PlannerStatus,
@@ -401,6 +406,8 @@ impl Session {
             sides: SideTracker::new(cfg.bootstrap.sectors),
             given_up: Vec::with_capacity(shm_types::MAX_OBJECTS),
             clusters_done: None,
+            score_frontiers: None,
+            decision: None,
             blacklist: Vec::new(),
             pending: false,
             status: PlannerStatus::Running,
@@ -446,12 +453,18 @@ impl Session {
 
     /// A frontier round on the exploration grid (earlier frontier goals blacklisted).
     pub(crate) fn frontier_job(&mut self, inputs: &PlannerInputs<'_>) -> Step {
+        let scoring = self.score_frontiers.map(|(params, weights)| Scoring {
+            map: self.buffers.map(inputs.map),
+            params,
+            weights,
+        });
         let job = FrontierJob {
             explore: self.buffers.explore(inputs.explore),
             nav: self.buffers.nav(inputs.nav),
             base: inputs.state.base_pose,
             blacklist: self.blacklist.clone(),
             params: self.frontier,
+            scoring,
         };
         self.compute(PlannerJob::Frontier(job))
     }
@@ -470,6 +483,12 @@ impl Session {
             JobOutput::Frontier(r) => {
                 self.buffers.put_explore(r.explore);
                 self.buffers.put_nav(r.nav);
+                if let Some(sc) = r.scoring {
+                    if let Some(view) = r.view {
+                        self.decision = Some(chosen_decision(view, -1, sc.map.header.seq));
+                    }
+                    self.buffers.put_map(sc.map);
+                }
                 Back::Step(match r.goal {
                     Some((pose, _)) => {
                         self.blacklist.push([pose[0], pose[1]]);
@@ -491,9 +510,21 @@ impl Session {
                 self.buffers.put_map(r.map);
                 self.buffers.put_nav(r.nav);
             }
-            Back::Coverage(r) => self.buffers.put_nav(r.nav),
+            Back::Coverage(r) => {
+                self.buffers.put_nav(r.nav);
+                self.buffers.put_map(r.scoring.map);
+            }
         }
         Step::Wait
+    }
+
+    /// The newest chassis-goal decision, once, with the current state.
+    pub(crate) fn take_decision(&mut self) -> Option<Box<PlannerDecision>> {
+        let state = self.status.code();
+        self.decision.take().map(|mut d| {
+            d.state = state;
+            d
+        })
     }
 
     /// End the session.
@@ -531,6 +562,18 @@ pub(crate) enum Back {
     Gbv(GbvResult),
     /// A coverage round.
     Coverage(CoverageResult),
+}
+
+/// The trace of a chassis goal whose one evaluated candidate is the chosen view (baselines).
+pub(crate) fn chosen_decision(c: Candidate, cluster_id: i32, map_seq: u64) -> Box<PlannerDecision> {
+    let mut d = boxed_zeroed::<PlannerDecision>();
+    d.kind = decision_kind::GBV;
+    d.map_seq = map_seq;
+    d.cluster_id = cluster_id;
+    d.count = 1;
+    d.evaluated = 1;
+    d.candidates[0] = Candidate { chosen: 1, ..c };
+    d
 }
 
 /// A neck goal for `map` with the mount's pitch (yaw 0, score 0).

@@ -56,7 +56,6 @@ pub struct VpsomPlanner {
     tracked: Option<i32>,
     rounds: Vec<(i32, u32)>,
     visited: Vec<(i32, [f32; 2])>,
-    decision: Option<Box<PlannerDecision>>,
 }
 
 impl VpsomPlanner {
@@ -81,7 +80,6 @@ impl VpsomPlanner {
             tracked: None,
             rounds: Vec::with_capacity(shm_types::MAX_OBJECTS),
             visited: Vec::new(),
-            decision: None,
         }
     }
 
@@ -183,7 +181,7 @@ impl ViewPlanner for VpsomPlanner {
         };
         self.session.buffers.put_map(r.map);
         self.session.buffers.put_nav(r.nav);
-        self.decision = Some(r.decision);
+        self.session.decision = Some(r.decision);
         for id in &r.unreachable {
             self.count_round(*id);
         }
@@ -238,10 +236,7 @@ impl ViewPlanner for VpsomPlanner {
     }
 
     fn take_decision(&mut self) -> Option<Box<PlannerDecision>> {
-        self.decision.take().map(|mut d| {
-            d.state = self.session.status().code();
-            d
-        })
+        self.session.take_decision()
     }
 
     fn lbv_decision(&self, d: &mut PlannerDecision) -> bool {
