@@ -329,30 +329,9 @@ impl Settings {
         )?;
         w.sched.validate(c, "wakeup.sched")?;
         let i = &self.ipc;
-        for p in &i.payloads {
-            c.require(
-                PAYLOADS.contains(&p.as_str()),
-                "ipc.payloads",
-                p,
-                "must be one of 64B, 8KiB, 600KiB, 4MiB",
-            )?;
-        }
-        for m in &i.modes {
-            c.require(
-                m == "poll" || m == "event",
-                "ipc.modes",
-                m,
-                "must be \"poll\" or \"event\"",
-            )?;
-        }
-        for f in &i.fills {
-            c.require(
-                f == "zero" || f == "reuse",
-                "ipc.fills",
-                f,
-                "must be \"zero\" or \"reuse\"",
-            )?;
-        }
+        one_of(c, "ipc.payloads", &i.payloads, &PAYLOADS)?;
+        one_of(c, "ipc.modes", &i.modes, &["poll", "event"])?;
+        one_of(c, "ipc.fills", &i.fills, &["zero", "reuse"])?;
         for &r in &i.rates_hz {
             c.in_range("ipc.rates_hz", r, 0.0, 100_000.0)?;
         }
@@ -384,6 +363,19 @@ impl Settings {
         c.count("stress.cpu_workers", self.stress.cpu_workers, 0, 1024)?;
         c.count("stress.memory_mb", self.stress.memory_mb, 0, 1 << 20)
     }
+}
+
+/// `Ok` if every entry of the list `key` is one of `allowed`.
+fn one_of(c: &Checker, key: &str, values: &[String], allowed: &[&str]) -> Result<(), ConfigError> {
+    for v in values {
+        c.require(
+            allowed.contains(&v.as_str()),
+            key,
+            v,
+            &format!("must be one of {}", allowed.join(", ")),
+        )?;
+    }
+    Ok(())
 }
 
 #[cfg(test)]
