@@ -4,7 +4,8 @@
 //! Targets (issue 5): LBV of 18 candidates p99 ≤ 200 µs, 360 candidates ≤ 2 ms; GBV of 36
 //! candidates (full f_a + f_c) ≤ 20 ms on 2 threads, 1000 candidates ≤ 300 ms.
 //! Besides criterion's means, the LBV latency distribution (p50/p99/max over 20 000 calls) is
-//! printed, since the target is a tail figure.
+//! printed, since the target is a tail figure, split by whether the thread waited on a run queue
+//! during the call (`/proc/thread-self/schedstat`).
 //!
 //! Run: `cargo bench -p nodes --bench planner`.
 //!
@@ -12,6 +13,13 @@
 //! LBV 18: mean 36 µs, single-call p50 21 µs / p99 37 µs; LBV 360: mean 0.65 ms (p50 0.60 ms);
 //! GBV eval 36 on 2 threads: 0.34 ms; 1000: 8.0 ms; whole GBV job with a 256 × 256 grid
 //! (inflation + Dijkstra + 36 candidates): 2.4 ms.
+//!
+//! The LBV-360 tail (p99 4.7 ms) is descheduling, not work: every call has the same inputs, and
+//! with another helper's builds on the 2 vCPUs (load ≈ 2–4), 546 of 20 000 calls waited on the
+//! run queue; calls that did not: p50 0.61 ms, p99 0.80 ms; wall minus run-queue wait over all
+//! calls: p99 0.81 ms. The same binary under `chrt -f 50` (the LBV thread's policy when allowed):
+//! p50 0.61 ms, p99 0.74 ms (one call stalled by RT throttling). The ≤ 2 ms target holds for the
+//! work itself; the host's real-time policy is what keeps other processes off the LBV thread.
 
 use criterion::{Criterion, criterion_group};
 use nodes::config::CameraConfig;
@@ -154,28 +162,70 @@ fn bench_gbv(c: &mut Criterion) {
     });
 }
 
-/// p50 / p99 / max of single LBV calls (not a criterion statistic).
+/// The calling thread's scheduler statistics from `/proc/thread-self/schedstat`: time spent
+/// waiting on a run queue (ns) and the number of times it was put on a CPU. `None` where the
+/// kernel does not provide them.
+fn sched_stat() -> Option<(u64, u64)> {
+    let s = std::fs::read_to_string("/proc/thread-self/schedstat").ok()?;
+    let mut f = s.split_whitespace().skip(1).map(|x| x.parse::<u64>().ok());
+    Some((f.next()??, f.next()??))
+}
+
+/// p50 / p99 / max of single LBV calls (not a criterion statistic), split by whether the thread
+/// was descheduled during the call: the inputs are the same on every call (the base moves by at
+/// most 1 mm), so the work is the same, and a tail made of calls during which the thread waited
+/// on a run queue is the VM / other processes taking the CPU, not the planner.
 fn lbv_tail() {
     let (_, _, target) = setup();
     let map = scene3_map();
     for m in [18usize, 360] {
         let mut lbv = lbv_with(m);
-        let mut ns: Vec<u64> = (0..20_000)
+        // (wall, run-queue wait) per call, ns; wait is None without schedstat.
+        let calls: Vec<(u64, Option<u64>)> = (0..20_000)
             .map(|k| {
                 let base = [BASE[0], BASE[1] + 1e-5 * (k % 100) as f32, BASE[2]];
+                let before = sched_stat();
                 let t = Instant::now();
                 black_box(lbv.evaluate(&map, base, 0.0, Some(&target)));
-                t.elapsed().as_nanos() as u64
+                let wall = t.elapsed().as_nanos() as u64;
+                let after = sched_stat();
+                let wait = before.zip(after).and_then(|(b, a)| {
+                    // Put back on a CPU during the call: it waited (a.0 - b.0) ns.
+                    (a.1 > b.1).then(|| a.0.saturating_sub(b.0)).or(Some(0))
+                });
+                (wall, wait)
             })
             .collect();
-        ns.sort_unstable();
-        let q = |f: f64| ns[((ns.len() as f64 * f) as usize).min(ns.len() - 1)] as f64 / 1000.0;
+        let stats = |mut v: Vec<u64>| -> String {
+            if v.is_empty() {
+                return "none".into();
+            }
+            v.sort_unstable();
+            let q = |f: f64| v[((v.len() as f64 * f) as usize).min(v.len() - 1)] as f64 / 1e3;
+            format!(
+                "p50 {:.1} µs, p99 {:.1} µs, max {:.1} µs (n = {})",
+                q(0.5),
+                q(0.99),
+                *v.last().unwrap_or(&0) as f64 / 1e3,
+                v.len()
+            )
+        };
         println!(
-            "lbv_{m}_candidates single-call latency: p50 {:.1} µs, p99 {:.1} µs, max {:.1} µs",
-            q(0.5),
-            q(0.99),
-            *ns.last().unwrap_or(&0) as f64 / 1000.0
+            "lbv_{m}_candidates single-call latency: {}",
+            stats(calls.iter().map(|c| c.0).collect())
         );
+        if calls.iter().all(|c| c.1.is_some()) {
+            let undisturbed = calls.iter().filter(|c| c.1 == Some(0)).map(|c| c.0);
+            let running = calls.iter().map(|c| c.0.saturating_sub(c.1.unwrap_or(0)));
+            println!(
+                "  calls without a wait on the run queue: {}\n  \
+                 wall minus run-queue wait, all calls: {}\n  \
+                 calls descheduled: {}",
+                stats(undisturbed.collect()),
+                stats(running.collect()),
+                calls.iter().filter(|c| c.1 != Some(0)).count()
+            );
+        }
     }
 }
 
