@@ -468,3 +468,43 @@ fn gbv_rounds_do_not_return_to_a_view_already_taken() {
     }
     assert_eq!(planner.summary().rounds, 4);
 }
+
+/// Regression (paper-scene-1, seed 1 at 30 Hz): when every known cluster became done while the
+/// base was still driving to the last GBV, the neck swept 360° on top of the base's turn, the
+/// camera turned faster than visual tracking allows and localization was lost. The camera now
+/// stays on the last goal's cluster; the sweep is for the start, before any cluster is known.
+#[test]
+fn camera_stays_on_the_cluster_when_all_are_done_during_a_goal() {
+    let cfg = PlannerConfig::default();
+    let camera = CameraConfig::default();
+    let mut planner = make_planner(&cfg, &camera);
+    let mut map = one_cup_map([1.0, 0.0]);
+    let mut state = RobotState {
+        base_pose: [-2.0, 0.0, 0.0],
+        ..Default::default()
+    };
+    let g = next_gbv(planner.as_mut(), &map, &state);
+    // The base is on its way (turning), and the cup's model completes.
+    state.nav_goal_id = g.goal_id;
+    state.nav_status = nav_status::MOVING;
+    for o in map.objects.iter_mut().take(map.count as usize) {
+        o.h_sopm = 0.1;
+        o.complete = 1;
+    }
+    let mount = camera.mount;
+    for k in 0..20 {
+        state.base_pose = [-1.8, 0.5, 0.3 * k as f32];
+        let neck = planner.neck_goal(&map, &state, k * 50_000_000);
+        state.neck_yaw = neck.yaw;
+        let pose = mount.camera_pose(state.base_pose, neck.yaw, mount.pitch());
+        let axis = Vec3::from(pose.matrix3.z_axis).truncate().normalize();
+        let to_cup = (Vec3::new(0.0, 0.0, 0.8) - Vec3::from(pose.translation))
+            .truncate()
+            .normalize();
+        assert!(
+            axis.dot(to_cup) > 0.999,
+            "step {k}: the camera looks {:.0}° away from the cluster",
+            axis.dot(to_cup).clamp(-1.0, 1.0).acos().to_degrees()
+        );
+    }
+}

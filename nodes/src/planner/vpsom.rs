@@ -15,7 +15,8 @@
 //!    rounds (rounds in which it had no reachable candidate count too); then it is given up.
 //!
 //! The LBV always tracks the cluster of the current GBV goal while it is unfinished, else the
-//! first unfinished cluster; with none, the neck looks around.
+//! first unfinished cluster; with none, the camera stays on the last GBV goal's cluster, and
+//! before any GBV the neck looks around.
 //! Termination: every cluster done → `Terminated`; clusters remain but all are given up or
 //! none has a reachable candidate → `NoCandidates`.
 
@@ -23,6 +24,7 @@ use crate::config::CameraConfig;
 use crate::geom::CameraMount;
 use crate::planner::clusters::{self, ClusterInfo};
 use crate::planner::config::{PlannerConfig, PlannerKind};
+use crate::planner::coverage::aim_neck;
 use crate::planner::evaluate::{EvalParams, Target};
 use crate::planner::gbv::{GbvJob, GbvParams};
 use crate::planner::lbv::Lbv;
@@ -221,7 +223,16 @@ impl ViewPlanner for VpsomPlanner {
             }
             None => {
                 self.last_lbv = None;
-                goal.yaw = self.look.target(state.neck_yaw);
+                // Every known cluster done while the last GBV goal is still being driven to:
+                // keep the camera on that goal's cluster. A 360° sweep on top of the base's
+                // turns exceeds the tracking rate and loses localization.
+                let held = self
+                    .tracked
+                    .and_then(|id| clusters::cluster_info(map, id, self.cfg.eps_sopm));
+                goal.yaw = match held {
+                    Some(c) => aim_neck(&self.mount, state.base_pose, c.center),
+                    None => self.look.target(state.neck_yaw),
+                };
             }
         }
         goal
