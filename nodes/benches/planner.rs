@@ -29,6 +29,7 @@ use nodes::planner::lbv::neck_yaws;
 use nodes::planner::reach::NavParams;
 use nodes::planner::synth::scene3_map;
 use nodes::planner::{EvalParams, Lbv, PlannerConfig, Target, Weights};
+use runtime::executor::ThreadSchedStat;
 use shm_types::{OccupancyGrid, boxed_zeroed, grid_cell};
 use std::hint::black_box;
 use std::time::Instant;
@@ -162,15 +163,6 @@ fn bench_gbv(c: &mut Criterion) {
     });
 }
 
-/// The calling thread's scheduler statistics from `/proc/thread-self/schedstat`: time spent
-/// waiting on a run queue (ns) and the number of times it was put on a CPU. `None` where the
-/// kernel does not provide them.
-fn sched_stat() -> Option<(u64, u64)> {
-    let s = std::fs::read_to_string("/proc/thread-self/schedstat").ok()?;
-    let mut f = s.split_whitespace().skip(1).map(|x| x.parse::<u64>().ok());
-    Some((f.next()??, f.next()??))
-}
-
 /// p50 / p99 / max of single LBV calls (not a criterion statistic), split by whether the thread
 /// was descheduled during the call: the inputs are the same on every call (the base moves by at
 /// most 1 mm), so the work is the same, and a tail made of calls during which the thread waited
@@ -180,6 +172,8 @@ fn lbv_tail() {
     let map = scene3_map();
     for m in [18usize, 360] {
         let mut lbv = lbv_with(m);
+        let stat = ThreadSchedStat::open_current().ok();
+        let sched_stat = || stat.as_ref().and_then(|s| s.read().ok());
         // (wall, run-queue wait) per call, ns; wait is None without schedstat.
         let calls: Vec<(u64, Option<u64>)> = (0..20_000)
             .map(|k| {
@@ -189,9 +183,13 @@ fn lbv_tail() {
                 black_box(lbv.evaluate(&map, base, 0.0, Some(&target)));
                 let wall = t.elapsed().as_nanos() as u64;
                 let after = sched_stat();
-                let wait = before.zip(after).and_then(|(b, a)| {
-                    // Put back on a CPU during the call: it waited (a.0 - b.0) ns.
-                    (a.1 > b.1).then(|| a.0.saturating_sub(b.0)).or(Some(0))
+                let wait = before.zip(after).map(|(b, a)| {
+                    // Put back on a CPU during the call: it waited this long.
+                    if a.timeslices > b.timeslices {
+                        a.run_wait_ns.saturating_sub(b.run_wait_ns)
+                    } else {
+                        0
+                    }
                 });
                 (wall, wait)
             })

@@ -5,19 +5,25 @@
 //! neck goal computed from such a map (each frame counted once; the same difference at every
 //! neck goal is reported as the frame's age at the LBV); LBV execution time and misses from
 //! the `deadline` topic (events whose thread name contains "lbv", or all events if none does);
-//! GBV round time = `eval_ns` of GBV planner decisions. `--fake` runs this binary's own
+//! GBV round time = `eval_ns` of GBV planner decisions. Every miss carries its cause from the
+//! thread's scheduler statistics (`runtime::executor::miss_cause_of`). With `probe`, cyclictest
+//! runs beside the pipeline (one thread per CPU at the LBV's priority), so the report shows what
+//! the platform's own wake-ups did over the same time. `--fake` runs this binary's own
 //! `fake-pipeline` (same topics, realistic stamps, a real executor for the LBV) instead.
 
 use crate::Outcome;
 use crate::report::{BudgetCheck, SampleLog, Series, histogram_png};
 use crate::settings::{Budgets, E2eSettings};
 use crate::stats::{Stats, table_header, table_row};
+use crate::wakeup::Cyclictest;
 use anyhow::{Context, Result, anyhow, bail};
 use runtime::clock::{Clock, MonotonicClock};
 use runtime::executor::{Control, Cycle, EventTrace, Executor, ExecutorConfig};
 use runtime::ports::{PortContext, PortsConfig, Stamp};
 use serde_json::json;
-use shm_types::{DeadlineEvent, DepthFrame, NeckGoal, ObjectMap, PlannerDecision, decision_kind};
+use shm_types::{
+    DeadlineEvent, DepthFrame, NeckGoal, ObjectMap, PlannerDecision, decision_kind, miss_cause,
+};
 use std::collections::BTreeMap;
 use std::path::{Path, PathBuf};
 use std::process::{Child, Command, Stdio};
@@ -93,6 +99,10 @@ struct Samples {
     gbv: Vec<u64>,
     exec: BTreeMap<String, Vec<u64>>,
     misses: BTreeMap<String, u64>,
+    /// Every missed cycle, in arrival order.
+    missed: Vec<DeadlineEvent>,
+    /// Deadline budget per thread, ns.
+    budget: BTreeMap<String, u64>,
     neck_seen: u64,
     decisions_seen: [u64; 2],
     lost: u64,
@@ -143,14 +153,19 @@ pub fn run(
     dir: &Path,
     log: &mut SampleLog,
 ) -> Result<Outcome> {
-    let ports = if fake || e.pipeline_config.is_empty() {
-        PortsConfig::default()
+    let (ports, lbv_priority) = if fake || e.pipeline_config.is_empty() {
+        (PortsConfig::default(), ExecutorConfig::default().priority)
     } else {
-        nodes::config::Config::load(Path::new(&e.pipeline_config))
-            .with_context(|| format!("load {}", e.pipeline_config))?
-            .ports
+        let c = nodes::config::Config::load(Path::new(&e.pipeline_config))
+            .with_context(|| format!("load {}", e.pipeline_config))?;
+        (c.ports, c.executor.priority)
     };
     let duration = Duration::from_secs_f64(e.duration_s);
+    let probe = if e.probe {
+        Some(Probe::start(lbv_priority, dir))
+    } else {
+        None
+    };
     let mut acc = Samples::default();
     let mut cmdline = String::new();
     let mut ns = String::new();
@@ -172,6 +187,8 @@ pub fn run(
         gbv,
         exec,
         misses,
+        missed,
+        budget,
         neck_seen,
         decisions_seen,
         lost,
@@ -190,6 +207,16 @@ pub fn run(
         .flat_map(|n| exec[n].iter().copied())
         .collect();
     let lbv_misses: u64 = lbv_names.iter().map(|n| misses[n]).sum();
+    let lbv_missed: Vec<&DeadlineEvent> = missed
+        .iter()
+        .filter(|m| lbv_names.iter().any(|n| n == m.thread_name()))
+        .collect();
+    let lbv_budget_ns = lbv_names
+        .iter()
+        .filter_map(|n| budget.get(n).copied())
+        .max()
+        .unwrap_or(0);
+    let probe = probe.map(|p| p.stop());
     let p_map = Stats::of_samples(&frame_map);
     let p_lbv = Stats::of_samples(&frame_lbv);
     let p_age = Stats::of_samples(&lbv_age);
@@ -212,14 +239,31 @@ pub fn run(
         &p_exec,
     );
     md += &table_row(&["GBV round".into()], &p_gbv);
+    let causes = count_causes(&lbv_missed);
     md += &format!(
-        "\nLBV deadline misses: {lbv_misses} over {} cycles. Samples lost to overwrite on the harness's \
+        "\nLBV deadline misses: {lbv_misses}{} over {} cycles. Samples lost to overwrite on the harness's \
          subscribers (not the pipeline's): {lost}. Received while measuring: {neck_seen} neck goals \
          (those with `frame_stamp_ns` = 0 are not counted above), {} GBV and {} LBV decisions.\n",
+        if causes.is_empty() {
+            String::new()
+        } else {
+            format!(
+                " ({})",
+                causes
+                    .iter()
+                    .map(|(c, n)| format!("{c} {n}"))
+                    .collect::<Vec<_>>()
+                    .join(", ")
+            )
+        },
         lbv_exec.len(),
         decisions_seen[0],
         decisions_seen[1]
     );
+    md += &misses_table(&lbv_missed);
+    if let Some(p) = &probe {
+        md += &p.markdown(lbv_budget_ns);
+    }
     histogram_png(
         &dir.join("e2e.png"),
         "end-to-end latency",
@@ -278,11 +322,220 @@ pub fn run(
             "measured_s": measured.as_secs_f64(),
             "frame_to_map": p_map, "frame_to_lbv": p_lbv, "lbv_frame_age": p_age, "lbv_exec": p_exec,
             "lbv_threads": lbv_names, "lbv_deadline_misses": lbv_misses, "gbv_round": p_gbv,
+            "lbv_miss_causes": causes.iter().cloned().collect::<BTreeMap<_, _>>(),
+            "lbv_missed_cycles": lbv_missed.iter().map(|m| json!({
+                "thread": m.thread_name(), "cycle": m.cycle, "lateness_ns": m.lateness_ns,
+                "exec_ns": m.exec_ns, "cpu_ns": m.cpu_ns, "run_wait_ns": m.run_wait_ns,
+                "sched_stats": m.sched_stats != 0, "cause": miss_cause::name(m.miss_cause),
+            })).collect::<Vec<_>>(),
+            "probe": probe.as_ref().map(|p| p.json(lbv_budget_ns)),
             "harness_lost": lost,
         }),
         checks,
         errors,
     })
+}
+
+/// Misses per cause name, most frequent first.
+fn count_causes(missed: &[&DeadlineEvent]) -> Vec<(&'static str, u64)> {
+    let mut n: BTreeMap<&'static str, u64> = BTreeMap::new();
+    for m in missed {
+        *n.entry(miss_cause::name(m.miss_cause)).or_default() += 1;
+    }
+    let mut v: Vec<_> = n.into_iter().collect();
+    v.sort_by_key(|&(c, k)| (std::cmp::Reverse(k), c));
+    v
+}
+
+/// Missed cycles shown in the report (all are in the JSON and the MCAP).
+const MISSES_SHOWN: usize = 20;
+
+/// A table of the missed cycles: where each one's time went.
+fn misses_table(missed: &[&DeadlineEvent]) -> String {
+    if missed.is_empty() {
+        return String::new();
+    }
+    let ms = |ns: u64| format!("{:.2}", ns as f64 / 1e6);
+    let mut md = String::from(
+        "\nMissed cycles (ms; CPU time and run-queue wait are the thread's own, from the end of \
+         the previous cycle; cause = the largest share of release → end):\n\n\
+         | thread | cycle | lateness | execution | CPU | run-queue wait | cause |\n\
+         |---|---|---|---|---|---|---|\n",
+    );
+    for m in missed.iter().take(MISSES_SHOWN) {
+        let (cpu, wait) = if m.sched_stats != 0 {
+            (ms(m.cpu_ns), ms(m.run_wait_ns))
+        } else {
+            ("–".into(), "–".into())
+        };
+        md += &format!(
+            "| {} | {} | {} | {} | {cpu} | {wait} | {} |\n",
+            m.thread_name(),
+            m.cycle,
+            ms(m.lateness_ns.max(0) as u64),
+            ms(m.exec_ns),
+            miss_cause::name(m.miss_cause)
+        );
+    }
+    if missed.len() > MISSES_SHOWN {
+        md += &format!("\n({} more in report.json.)\n", missed.len() - MISSES_SHOWN);
+    }
+    md
+}
+
+/// cyclictest's histogram range for the probe, µs (later wake-ups count at its max).
+const PROBE_HIST_MAX_US: u64 = 50_000;
+/// The probe's period, µs.
+const PROBE_PERIOD_US: u64 = 1_000;
+
+/// cyclictest running beside the pipeline: one thread per online CPU, pinned, at the LBV's
+/// `SCHED_FIFO` priority, 1 ms period, until stopped.
+enum Probe {
+    Running(Cyclictest, Instant),
+    /// Not started, and why.
+    Absent(String),
+}
+
+/// What the probe measured, or why it did not.
+enum ProbeOutcome {
+    Measured {
+        cmdline: String,
+        seconds: f64,
+        threads: Vec<Vec<u64>>,
+    },
+    Absent(String),
+}
+
+impl Probe {
+    fn start(priority: i32, dir: &Path) -> Self {
+        if !crate::stress::which("cyclictest") {
+            return Self::Absent(
+                "cyclictest not found (`sudo apt-get install rt-tests`); no probe".into(),
+            );
+        }
+        let cpus = match online_cpus() {
+            Ok(c) => c,
+            Err(e) => return Self::Absent(format!("no probe: {e:#}")),
+        };
+        let list: Vec<String> = cpus.iter().map(|c| c.to_string()).collect();
+        let args = vec![
+            "-i".into(),
+            PROBE_PERIOD_US.to_string(),
+            "-t".into(),
+            cpus.len().to_string(),
+            "-a".into(),
+            list.join(","),
+            "-h".into(),
+            PROBE_HIST_MAX_US.to_string(),
+            "-p".into(),
+            priority.to_string(),
+            "--policy=fifo".into(),
+            "-m".into(),
+        ];
+        match Cyclictest::spawn(args, cpus.len(), &dir.join("probe-cyclictest.txt")) {
+            Ok(c) => Self::Running(c, Instant::now()),
+            Err(e) => Self::Absent(format!("no probe: {e:#}")),
+        }
+    }
+
+    fn stop(self) -> ProbeOutcome {
+        match self {
+            Self::Absent(why) => ProbeOutcome::Absent(why),
+            Self::Running(c, t0) => {
+                let cmdline = c.cmdline.clone();
+                let seconds = t0.elapsed().as_secs_f64();
+                match c.stop() {
+                    Ok(threads) => ProbeOutcome::Measured {
+                        cmdline,
+                        seconds,
+                        threads,
+                    },
+                    Err(e) => {
+                        let why = format!("the probe failed: {e:#}");
+                        eprintln!("e2e: {why}");
+                        ProbeOutcome::Absent(why)
+                    }
+                }
+            }
+        }
+    }
+}
+
+impl ProbeOutcome {
+    /// Wake-ups at least `budget_ns` late, per thread.
+    fn over(threads: &[Vec<u64>], budget_ns: u64) -> Vec<usize> {
+        threads
+            .iter()
+            .map(|t| t.iter().filter(|&&l| l >= budget_ns).count())
+            .collect()
+    }
+
+    fn markdown(&self, budget_ns: u64) -> String {
+        match self {
+            Self::Absent(why) => format!("\n**Platform probe: {why}.**\n"),
+            Self::Measured {
+                cmdline,
+                seconds,
+                threads,
+            } => {
+                let mut md = format!(
+                    "\nPlatform probe over the same {seconds:.0} s (start-up included): `{cmdline}`: \
+                     one thread per CPU at the LBV's priority. A wake-up of this probe later \
+                     than the LBV budget ({:.1} ms) would have made an LBV cycle released at that \
+                     moment miss, whatever the pipeline did.\n\n",
+                    budget_ns as f64 / 1e6
+                );
+                md += &table_header(&["cyclictest thread"]);
+                for (k, t) in threads.iter().enumerate() {
+                    md += &table_row(&[format!("CPU {k}")], &Stats::of_samples(t));
+                }
+                let over = Self::over(threads, budget_ns);
+                md += &format!(
+                    "\nProbe wake-ups ≥ {:.1} ms late, per CPU: {over:?}.\n",
+                    budget_ns as f64 / 1e6
+                );
+                md
+            }
+        }
+    }
+
+    fn json(&self, budget_ns: u64) -> serde_json::Value {
+        match self {
+            Self::Absent(why) => json!({"error": why}),
+            Self::Measured {
+                cmdline,
+                seconds,
+                threads,
+            } => json!({
+                "command": cmdline, "seconds": seconds,
+                "threads": threads.iter().map(|t| Stats::of_samples(t)).collect::<Vec<_>>(),
+                "late_by_lbv_budget_or_more": Self::over(threads, budget_ns),
+            }),
+        }
+    }
+}
+
+/// The online CPUs (`/sys/devices/system/cpu/online`, e.g. `0-3,6`).
+fn online_cpus() -> Result<Vec<usize>> {
+    let path = "/sys/devices/system/cpu/online";
+    let text = std::fs::read_to_string(path).with_context(|| format!("read {path}"))?;
+    parse_cpu_list(text.trim()).with_context(|| format!("{path}: {:?}", text.trim()))
+}
+
+fn parse_cpu_list(s: &str) -> Result<Vec<usize>> {
+    let mut cpus = Vec::new();
+    for part in s.split(',').filter(|p| !p.is_empty()) {
+        let (a, b) = part.split_once('-').unwrap_or((part, part));
+        let (a, b): (usize, usize) = (a.parse()?, b.parse()?);
+        if a > b {
+            bail!("range {part} is reversed");
+        }
+        cpus.extend(a..=b);
+    }
+    if cpus.is_empty() {
+        bail!("no CPUs");
+    }
+    Ok(cpus)
 }
 
 /// One pipeline session: start it, measure until the total measured time reaches `duration`
@@ -406,10 +659,19 @@ fn session(
                 let name = ev.thread_name().to_string();
                 acc.exec.entry(name.clone()).or_default().push(ev.exec_ns);
                 *acc.misses.entry(name.clone()).or_default() += ev.missed as u64;
+                acc.budget.insert(name.clone(), ev.budget_ns);
+                if ev.missed != 0 {
+                    acc.missed.push(*ev);
+                }
                 log.record(
                     &format!("/e2e/deadline/{name}"),
                     now,
-                    &json!({"cycle": ev.cycle, "lateness_ns": ev.lateness_ns, "exec_ns": ev.exec_ns, "missed": ev.missed}),
+                    &json!({
+                        "cycle": ev.cycle, "lateness_ns": ev.lateness_ns, "exec_ns": ev.exec_ns,
+                        "cpu_ns": ev.cpu_ns, "run_wait_ns": ev.run_wait_ns,
+                        "sched_stats": ev.sched_stats, "missed": ev.missed,
+                        "miss_cause": miss_cause::name(ev.miss_cause),
+                    }),
                 )?;
             }
         }
@@ -534,4 +796,65 @@ pub fn fake_pipeline(ns: &str) -> Result<()> {
     }
     let _ = lbv.join();
     Ok(())
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn cpu_lists_are_parsed() {
+        assert_eq!(parse_cpu_list("0-1").unwrap(), vec![0, 1]);
+        assert_eq!(parse_cpu_list("0-2,5,7-8").unwrap(), vec![0, 1, 2, 5, 7, 8]);
+        assert!(parse_cpu_list("3-1").is_err());
+        assert!(parse_cpu_list("a").is_err());
+        assert!(parse_cpu_list("").is_err());
+    }
+
+    #[test]
+    fn misses_are_counted_and_tabled_by_cause() {
+        let ev = |cycle, cause, stats| {
+            let mut e = DeadlineEvent {
+                cycle,
+                lateness_ns: 7_000_000,
+                exec_ns: 250_000,
+                cpu_ns: 260_000,
+                run_wait_ns: 10_000,
+                missed: 1,
+                miss_cause: cause,
+                sched_stats: stats,
+                ..Default::default()
+            };
+            e.set_thread_name("planner-lbv");
+            e
+        };
+        let a = ev(3, miss_cause::LATE_WAKEUP, 1);
+        let b = ev(9, miss_cause::RUN_QUEUE, 1);
+        let c = ev(12, miss_cause::LATE_WAKEUP, 1);
+        let d = ev(15, miss_cause::UNKNOWN, 0);
+        let all = [&a, &b, &c, &d];
+        assert_eq!(
+            count_causes(&all),
+            vec![("late-wakeup", 2), ("run-queue", 1), ("unknown", 1)]
+        );
+        let md = misses_table(&all);
+        assert!(
+            md.contains("| planner-lbv | 3 | 7.00 | 0.25 | 0.26 | 0.01 | late-wakeup |"),
+            "{md}"
+        );
+        assert!(
+            md.contains("| planner-lbv | 15 | 7.00 | 0.25 | – | – | unknown |"),
+            "{md}"
+        );
+        assert_eq!(misses_table(&[]), "");
+        let many: Vec<DeadlineEvent> = (0..25).map(|k| ev(k, 3, 1)).collect();
+        let refs: Vec<&DeadlineEvent> = many.iter().collect();
+        assert!(misses_table(&refs).contains("(5 more in report.json.)"));
+    }
+
+    #[test]
+    fn probe_counts_wake_ups_late_by_the_budget() {
+        let t = vec![vec![1_000, 5_000_000, 4_999_999], vec![20_000_000, 7]];
+        assert_eq!(ProbeOutcome::over(&t, 5_000_000), vec![1, 1]);
+    }
 }

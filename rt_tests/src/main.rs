@@ -202,6 +202,9 @@ struct E2eArgs {
     /// `vpsom run --time-scale`.
     #[arg(long)]
     time_scale: Option<f64>,
+    /// Do not run the cyclictest probe beside the pipeline (`[e2e] probe`).
+    #[arg(long)]
+    no_probe: bool,
     /// Extra arguments for `vpsom run` (after `--`).
     #[arg(last = true)]
     run_args: Vec<String>,
@@ -313,6 +316,7 @@ fn real_main() -> Result<std::process::ExitCode> {
             set(&mut e.warmup_s, a.warmup);
             set(&mut e.vpsom, a.vpsom.clone());
             set(&mut e.time_scale, a.time_scale);
+            e.probe &= !a.no_probe;
             if !a.run_args.is_empty() {
                 e.run_args = a.run_args.clone();
             }

@@ -227,6 +227,9 @@ pub struct E2eSettings {
     pub pipeline_config: String,
     /// Extra arguments passed to `vpsom run` (e.g. `["--scene", "f.toml"]`).
     pub run_args: Vec<String>,
+    /// Run cyclictest beside the pipeline (one thread per CPU at the LBV's priority) as a
+    /// probe of the platform's own wake-ups over the same time.
+    pub probe: bool,
 }
 
 impl Default for E2eSettings {
@@ -238,6 +241,7 @@ impl Default for E2eSettings {
             vpsom: String::new(),
             pipeline_config: "config/default.toml".into(),
             run_args: Vec::new(),
+            probe: true,
         }
     }
 }

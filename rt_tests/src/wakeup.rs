@@ -8,8 +8,8 @@ use crate::stats::{Stats, columns, ratio, table_header, table_row};
 use anyhow::{Context, Result, bail};
 use runtime::executor::{Control, Cycle, Executor};
 use serde_json::json;
-use std::path::Path;
-use std::process::Command;
+use std::path::{Path, PathBuf};
+use std::process::{Child, Command, Stdio};
 use std::time::Duration;
 
 /// Period of thread `k`, µs.
@@ -235,7 +235,6 @@ fn cyclictest(
         return Ok(None);
     }
     let mut args: Vec<String> = vec![
-        "-q".into(),
         "-D".into(),
         format!("{}", duration_s as u64),
         "-i".into(),
@@ -263,42 +262,90 @@ fn cyclictest(
         let list: Vec<String> = w.sched.cpus.iter().map(|c| c.to_string()).collect();
         args.extend(["-a".into(), list.join(",")]);
     }
-    let cmdline = format!("cyclictest {}", args.join(" "));
-    // Its histogram is long: write it to a file (a pipe we do not drain would block it).
-    let out_path = dir.join("cyclictest.txt");
-    let out_file = std::fs::File::create(&out_path)
-        .with_context(|| format!("create {}", out_path.display()))?;
-    let mut child = Command::new("cyclictest")
-        .args(&args)
-        .stdout(out_file)
-        .stderr(std::process::Stdio::piped())
-        .spawn()
-        .with_context(|| format!("start {cmdline}"))?;
-    // Wait, staying responsive to Ctrl-C.
-    loop {
-        if child.try_wait()?.is_some() {
-            break;
-        }
-        if crate::interrupted() {
-            let _ = child.kill();
-            let _ = child.wait();
-            bail!("interrupted");
-        }
-        std::thread::sleep(Duration::from_millis(50));
+    let run = Cyclictest::spawn(args, w.threads, &dir.join("cyclictest.txt"))?;
+    let cmdline = run.cmdline.clone();
+    Ok(Some((run.wait()?, cmdline)))
+}
+
+/// A running `cyclictest -q` with a histogram (`-h`), its output going to a file.
+pub struct Cyclictest {
+    child: Child,
+    threads: usize,
+    out_path: PathBuf,
+    /// The command line.
+    pub cmdline: String,
+}
+
+impl Cyclictest {
+    /// Start `cyclictest -q <args>` with `threads` measuring threads; `args` must include `-h`.
+    pub fn spawn(args: Vec<String>, threads: usize, out_path: &Path) -> Result<Self> {
+        let args: Vec<String> = std::iter::once("-q".to_string()).chain(args).collect();
+        let cmdline = format!("cyclictest {}", args.join(" "));
+        // Its histogram is long: write it to a file (a pipe we do not drain would block it).
+        let out_file = std::fs::File::create(out_path)
+            .with_context(|| format!("create {}", out_path.display()))?;
+        let child = Command::new("cyclictest")
+            .args(&args)
+            .stdout(out_file)
+            .stderr(Stdio::piped())
+            .spawn()
+            .with_context(|| format!("start {cmdline}"))?;
+        Ok(Self {
+            child,
+            threads,
+            out_path: out_path.to_path_buf(),
+            cmdline,
+        })
     }
-    let out = child.wait_with_output()?;
-    if !out.status.success() {
-        bail!(
-            "{cmdline} failed ({}): {}",
-            out.status,
-            String::from_utf8_lossy(&out.stderr).trim()
-        );
+
+    /// Wait for it to end (it was given `-D`), staying responsive to Ctrl-C; per-thread samples
+    /// (ns, 1 µs resolution, histogram overflows recorded at that thread's max).
+    pub fn wait(mut self) -> Result<Vec<Vec<u64>>> {
+        loop {
+            if self.child.try_wait()?.is_some() {
+                break;
+            }
+            if crate::interrupted() {
+                let _ = self.child.kill();
+                let _ = self.child.wait();
+                bail!("interrupted");
+            }
+            std::thread::sleep(Duration::from_millis(50));
+        }
+        self.finish()
     }
-    let text = std::fs::read_to_string(&out_path)
-        .with_context(|| format!("read {}", out_path.display()))?;
-    let threads = parse_cyclictest(&text, w.threads)
-        .with_context(|| format!("cannot parse the output of {cmdline}"))?;
-    Ok(Some((threads, cmdline)))
+
+    /// Stop it with `SIGINT` (it then prints its histogram) and return what [`Cyclictest::wait`]
+    /// does.
+    pub fn stop(mut self) -> Result<Vec<Vec<u64>>> {
+        if self.child.try_wait()?.is_none() {
+            crate::payload::send_sigint(self.child.id())
+                .with_context(|| format!("stop {}", self.cmdline))?;
+        }
+        self.finish()
+    }
+
+    fn finish(self) -> Result<Vec<Vec<u64>>> {
+        let Self {
+            child,
+            threads,
+            out_path,
+            cmdline,
+        } = self;
+        let out = child.wait_with_output()?;
+        // cyclictest exits with status 0 after SIGINT (it handles the signal).
+        if !out.status.success() {
+            bail!(
+                "{cmdline} failed ({}): {}",
+                out.status,
+                String::from_utf8_lossy(&out.stderr).trim()
+            );
+        }
+        let text = std::fs::read_to_string(&out_path)
+            .with_context(|| format!("read {}", out_path.display()))?;
+        parse_cyclictest(&text, threads)
+            .with_context(|| format!("cannot parse the output of {cmdline}"))
+    }
 }
 
 /// Parse cyclictest's `-h` output into per-thread samples (ns).

@@ -12,6 +12,10 @@
 //! - [`MissPolicy::Hold`]: the executor runs once at once (late) and resumes the grid; the body
 //!   sees [`Cycle::previous_missed`] so it can hold its last output.
 //!
+//! Each cycle also reads the thread's scheduler statistics (`/proc/thread-self/schedstat`, one
+//! `pread` after the body), so every miss carries its cause ([`miss_cause_of`]): the body's own
+//! execution, waiting for a CPU, a wake-up that came late, or blocking inside the body.
+//!
 //! After `escalate_after` consecutive misses the executor **escalates**: the state becomes
 //! [`ExecutorState::Escalated`] (latched until [`ExecutorHandle::clear_escalation`]), the body
 //! sees [`Cycle::escalated`], and with [`EscalateAction::Stop`] the executor stops.
@@ -23,11 +27,12 @@
 
 use crate::clock::Clock;
 use crate::config::{Checker, ConfigError};
+pub use crate::os::{SchedStatReading, ThreadSchedStat};
 use crate::pool::PoolConfig;
 use crossbeam::channel::Sender;
 use hdrhistogram::Histogram;
 use serde::{Deserialize, Serialize};
-use shm_types::{DeadlineEvent, Header};
+use shm_types::{DeadlineEvent, Header, miss_cause};
 use std::fmt;
 use std::sync::atomic::{AtomicBool, AtomicU8, AtomicU64, Ordering};
 use std::sync::{Arc, Mutex, OnceLock};
@@ -434,6 +439,60 @@ pub struct Verdict {
     pub consecutive: u32,
     /// This cycle made the monitor escalate (the `escalate_after`-th consecutive miss).
     pub escalate: bool,
+    /// Why it missed ([`miss_cause`] code; `NONE` if it did not).
+    pub cause: u8,
+}
+
+/// The thread's scheduler statistics over one cycle: from the end of the previous cycle (after
+/// its bookkeeping) to the end of this one.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Default)]
+pub struct CycleSched {
+    /// Time on a CPU, ns (with a spin margin, this includes the spin before the release).
+    pub cpu_ns: u64,
+    /// Time runnable but waiting for a CPU, ns.
+    pub run_wait_ns: u64,
+}
+
+impl CycleSched {
+    /// The difference of two readings, `before` then `after`.
+    pub fn between(before: &SchedStatReading, after: &SchedStatReading) -> Self {
+        Self {
+            cpu_ns: after.cpu_ns.saturating_sub(before.cpu_ns),
+            run_wait_ns: after.run_wait_ns.saturating_sub(before.run_wait_ns),
+        }
+    }
+}
+
+/// Why a cycle released at `r`, woken at `r + lateness_ns` and ended `exec_ns` later missed its
+/// deadline: the largest share of `lateness + exec`, split by the scheduler statistics `sched`
+/// into running (`cpu`: [`miss_cause::EXECUTION`]), waiting for a CPU (`run_wait`:
+/// [`miss_cause::RUN_QUEUE`]), and not runnable: before the wake-up ([`miss_cause::LATE_WAKEUP`],
+/// the timer's wake-up came late; counted as `lateness − run_wait`, so run-queue wait is never
+/// taken for a late timer) or after it ([`miss_cause::BLOCKED`]). Ties go to the cause listed
+/// first. `UNKNOWN` without statistics.
+pub fn miss_cause_of(lateness_ns: u64, exec_ns: u64, sched: Option<CycleSched>) -> u8 {
+    let Some(CycleSched {
+        cpu_ns,
+        run_wait_ns,
+    }) = sched
+    else {
+        return miss_cause::UNKNOWN;
+    };
+    let total = lateness_ns + exec_ns;
+    let not_runnable = total.saturating_sub(cpu_ns).saturating_sub(run_wait_ns);
+    let late = not_runnable.min(lateness_ns.saturating_sub(run_wait_ns));
+    let blocked = not_runnable - late;
+    [
+        (cpu_ns, miss_cause::EXECUTION),
+        (run_wait_ns, miss_cause::RUN_QUEUE),
+        (late, miss_cause::LATE_WAKEUP),
+        (blocked, miss_cause::BLOCKED),
+    ]
+    .into_iter()
+    .fold((0, miss_cause::EXECUTION), |best, (t, c)| {
+        if t > best.0 { (t, c) } else { best }
+    })
+    .1
 }
 
 /// Records lateness and execution time into HDR histograms (1 ns .. 60 s, 3 significant
@@ -452,7 +511,12 @@ pub struct DeadlineMonitor {
     consecutive: u32,
     max_consecutive: u32,
     escalations: u64,
+    /// Misses by cause, indexed by [`miss_cause`] code.
+    causes: [u64; MISS_CAUSES],
 }
+
+/// Number of [`miss_cause`] codes.
+const MISS_CAUSES: usize = miss_cause::UNKNOWN as usize + 1;
 
 const HIST_MAX_NS: u64 = 60_000_000_000;
 
@@ -471,18 +535,30 @@ impl DeadlineMonitor {
             consecutive: 0,
             max_consecutive: 0,
             escalations: 0,
+            causes: [0; MISS_CAUSES],
         }
     }
 
-    /// Record one cycle: released at `release_ns`, woke at `wake_ns`, ended at `end_ns`.
-    pub fn record(&mut self, release_ns: u64, wake_ns: u64, end_ns: u64) -> Verdict {
-        self.lateness
-            .saturating_record(wake_ns.saturating_sub(release_ns));
-        self.exec.saturating_record(end_ns.saturating_sub(wake_ns));
+    /// Record one cycle: released at `release_ns`, woke at `wake_ns`, ended at `end_ns`, with
+    /// the thread's scheduler statistics over it if measured.
+    pub fn record(
+        &mut self,
+        release_ns: u64,
+        wake_ns: u64,
+        end_ns: u64,
+        sched: Option<CycleSched>,
+    ) -> Verdict {
+        let lateness = wake_ns.saturating_sub(release_ns);
+        let exec = end_ns.saturating_sub(wake_ns);
+        self.lateness.saturating_record(lateness);
+        self.exec.saturating_record(exec);
         self.cycles += 1;
         let missed = end_ns > release_ns.saturating_add(self.budget_ns);
         let mut escalate = false;
+        let mut cause = miss_cause::NONE;
         if missed {
+            cause = miss_cause_of(lateness, exec, sched);
+            self.causes[usize::from(cause)] += 1;
             self.misses += 1;
             self.consecutive += 1;
             self.max_consecutive = self.max_consecutive.max(self.consecutive);
@@ -497,12 +573,22 @@ impl DeadlineMonitor {
             missed,
             consecutive: self.consecutive,
             escalate,
+            cause,
         }
     }
 
-    /// The trace record of a cycle (`seq` = cycle + 1, stamped with the wake-up time).
-    pub fn event(&self, cycle: u64, release_ns: u64, wake_ns: u64, end_ns: u64) -> DeadlineEvent {
-        let missed = end_ns > release_ns.saturating_add(self.budget_ns);
+    /// The trace record of a cycle that [`DeadlineMonitor::record`] just recorded with the same
+    /// arguments and gave verdict `v` (`seq` = cycle + 1, stamped with the wake-up time).
+    pub fn event(
+        &self,
+        cycle: u64,
+        release_ns: u64,
+        wake_ns: u64,
+        end_ns: u64,
+        sched: Option<CycleSched>,
+        v: &Verdict,
+    ) -> DeadlineEvent {
+        let s = sched.unwrap_or_default();
         let mut e = DeadlineEvent {
             header: Header {
                 seq: cycle + 1,
@@ -514,8 +600,12 @@ impl DeadlineMonitor {
             budget_ns: self.budget_ns,
             lateness_ns: wake_ns as i64 - release_ns as i64,
             exec_ns: end_ns.saturating_sub(wake_ns),
-            consecutive_misses: self.consecutive,
-            missed: missed as u8,
+            cpu_ns: s.cpu_ns,
+            run_wait_ns: s.run_wait_ns,
+            consecutive_misses: v.consecutive,
+            missed: v.missed as u8,
+            miss_cause: v.cause,
+            sched_stats: sched.is_some() as u8,
             ..DeadlineEvent::default()
         };
         e.set_thread_name(&self.thread);
@@ -545,6 +635,25 @@ impl DeadlineMonitor {
     /// Times the run of consecutive misses reached `escalate_after`.
     pub fn escalations(&self) -> u64 {
         self.escalations
+    }
+
+    /// Misses with cause `code` ([`miss_cause`]).
+    pub fn misses_by(&self, code: u8) -> u64 {
+        self.causes.get(usize::from(code)).copied().unwrap_or(0)
+    }
+
+    /// `"late-wakeup 3, run-queue 1"`: the causes of the misses so far, most frequent first
+    /// (empty without misses).
+    pub fn miss_causes(&self) -> String {
+        let mut v: Vec<(u64, u8)> = (0..MISS_CAUSES as u8)
+            .map(|c| (self.misses_by(c), c))
+            .filter(|(n, _)| *n > 0)
+            .collect();
+        v.sort_by_key(|&(n, c)| (std::cmp::Reverse(n), c));
+        v.iter()
+            .map(|&(n, c)| format!("{} {n}", miss_cause::name(c)))
+            .collect::<Vec<_>>()
+            .join(", ")
     }
 
     /// Wake-up lateness histogram (ns).
@@ -606,10 +715,14 @@ impl fmt::Display for Summary {
     fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
         writeln!(
             f,
-            "{}: {} cycles, {} misses (max {} in a row), {} skipped, {} escalations, {:?}, {}",
+            "{}: {} cycles, {} misses{} (max {} in a row), {} skipped, {} escalations, {:?}, {}",
             self.name,
             self.monitor.cycles(),
             self.monitor.misses(),
+            match self.monitor.miss_causes() {
+                c if c.is_empty() => c,
+                c => format!(" ({c})"),
+            },
             self.monitor.max_consecutive(),
             self.skipped,
             self.monitor.escalations(),
@@ -809,6 +922,13 @@ impl Executor {
         let budget = ((period as f64 * cfg.budget_fraction).round() as u64).clamp(1, period);
         let margin = cfg.spin_margin_us * 1000;
         let mut monitor = DeadlineMonitor::new(&self.name, period, budget, cfg.escalate_after);
+        // Scheduler statistics only mean something against wall time.
+        let schedstat = clock
+            .is_real_time()
+            .then(ThreadSchedStat::open_current)
+            .and_then(Result::ok);
+        let read_stat = || schedstat.as_ref().and_then(|s| s.read().ok());
+        let mut last_stat = read_stat();
         let start = self.start_ns.unwrap_or_else(|| clock.now_ns());
         let mut grid: u64 = 0;
         let mut skipped: u64 = 0;
@@ -835,13 +955,18 @@ impl Executor {
             };
             let control = body(&cycle);
             let end = clock.now_ns();
-            let v = monitor.record(release, wake, end);
+            let stat = read_stat();
+            let sched = last_stat
+                .zip(stat)
+                .map(|(a, b)| CycleSched::between(&a, &b));
+            last_stat = stat;
+            let v = monitor.record(release, wake, end, sched);
             shared.cycles.store(monitor.cycles(), Ordering::Release);
             shared.misses.store(monitor.misses(), Ordering::Release);
             if let Some(sink) = &self.events
                 && (cfg.trace == EventTrace::All || (cfg.trace == EventTrace::Misses && v.missed))
                 && sink
-                    .try_send(monitor.event(cycle.index, release, wake, end))
+                    .try_send(monitor.event(cycle.index, release, wake, end, sched, &v))
                     .is_err()
             {
                 events_dropped += 1;
@@ -990,25 +1115,77 @@ mod tests {
     #[test]
     fn monitor_counts_misses_and_escalates_once_per_run() {
         let mut m = DeadlineMonitor::new("t", 1000, 800, 2);
-        assert!(!m.record(0, 10, 500).missed);
-        let v = m.record(1000, 1000, 1801);
+        assert!(!m.record(0, 10, 500, None).missed);
+        let v = m.record(1000, 1000, 1801, None);
         assert_eq!((v.missed, v.consecutive, v.escalate), (true, 1, false));
-        let v = m.record(2000, 2100, 3000);
+        assert_eq!(v.cause, miss_cause::UNKNOWN, "no statistics");
+        let sched = Some(CycleSched {
+            cpu_ns: 850,
+            run_wait_ns: 20,
+        });
+        let v = m.record(2000, 2100, 3000, sched);
         assert_eq!((v.missed, v.consecutive, v.escalate), (true, 2, true));
-        let v = m.record(3000, 3000, 4000);
+        assert_eq!(v.cause, miss_cause::EXECUTION);
+        let e = m.event(7, 2000, 2100, 3000, sched, &v);
+        assert_eq!(e.lateness_ns, 100);
+        assert_eq!(e.exec_ns, 900);
+        assert_eq!((e.cpu_ns, e.run_wait_ns, e.sched_stats), (850, 20, 1));
+        assert_eq!((e.missed, e.miss_cause, e.consecutive_misses), (1, 1, 2));
+        assert_eq!((e.cycle, e.header.seq), (7, 8));
+        assert_eq!(e.thread_name(), "t");
+        let v = m.record(3000, 3000, 4000, None);
         assert_eq!((v.missed, v.consecutive, v.escalate), (true, 3, false));
-        assert!(
-            !m.record(4000, 4000, 4800).missed,
-            "end == deadline is on time"
-        );
+        let v = m.record(4000, 4000, 4800, None);
+        assert!(!v.missed, "end == deadline is on time");
+        assert_eq!(v.cause, miss_cause::NONE);
+        let e = m.event(8, 4000, 4000, 4800, None, &v);
+        assert_eq!((e.missed, e.miss_cause, e.sched_stats), (0, 0, 0));
         assert_eq!((m.cycles(), m.misses(), m.max_consecutive()), (5, 3, 3));
         assert_eq!(m.escalations(), 1);
         assert_eq!(m.lateness().max(), 100);
-        let e = m.event(7, 2000, 2100, 3000);
-        assert_eq!(e.lateness_ns, 100);
-        assert_eq!(e.exec_ns, 900);
-        assert_eq!((e.missed, e.cycle, e.header.seq), (1, 7, 8));
-        assert_eq!(e.thread_name(), "t");
+        assert_eq!(m.misses_by(miss_cause::UNKNOWN), 2);
+        assert_eq!(m.miss_causes(), "unknown 2, execution 1");
+    }
+
+    #[test]
+    fn a_miss_is_put_down_to_the_largest_share_of_its_time() {
+        let s = |cpu_ns, run_wait_ns| {
+            Some(CycleSched {
+                cpu_ns,
+                run_wait_ns,
+            })
+        };
+        // Budget 5 ms. Woke 7 ms late, ran 0.3 ms, never waited for a CPU: the timer was late.
+        assert_eq!(
+            miss_cause_of(7_000_000, 300_000, s(300_000, 0)),
+            miss_cause::LATE_WAKEUP
+        );
+        // Woke 7 ms late, but 6.5 ms of it runnable on a run queue: the CPU was taken.
+        assert_eq!(
+            miss_cause_of(7_000_000, 300_000, s(300_000, 6_500_000)),
+            miss_cause::RUN_QUEUE
+        );
+        // On time, 6 ms of computing.
+        assert_eq!(
+            miss_cause_of(10_000, 6_000_000, s(6_000_000, 0)),
+            miss_cause::EXECUTION
+        );
+        // On time, 6 ms in the body but 1 ms of CPU: it blocked.
+        assert_eq!(
+            miss_cause_of(10_000, 6_000_000, s(1_000_000, 0)),
+            miss_cause::BLOCKED
+        );
+        // Shares: cpu 2, wait 1.5, late 3 − 1.5 = 1.5, blocked 6 − 2 − 1.5 − 1.5 = 1 → execution.
+        assert_eq!(
+            miss_cause_of(3_000_000, 3_000_000, s(2_000_000, 1_500_000)),
+            miss_cause::EXECUTION
+        );
+        // CPU time read across the cycle boundary can exceed the cycle: no underflow.
+        assert_eq!(
+            miss_cause_of(0, 1_000, s(5_000, 5_000)),
+            miss_cause::EXECUTION
+        );
+        assert_eq!(miss_cause_of(7_000_000, 0, None), miss_cause::UNKNOWN);
     }
 
     #[test]

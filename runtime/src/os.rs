@@ -115,6 +115,61 @@ pub fn hold_cpu_dma_latency(us: i32) -> io::Result<std::fs::File> {
     Ok(f)
 }
 
+/// The scheduler statistics of one thread (`/proc/thread-self/schedstat`, opened by that thread
+/// and read in place with `pread`: no allocation, one syscall per read).
+#[derive(Debug)]
+pub struct ThreadSchedStat {
+    file: std::fs::File,
+}
+
+/// One reading of [`ThreadSchedStat`], cumulative since the thread started.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Default)]
+pub struct SchedStatReading {
+    /// Time spent on a CPU, ns.
+    pub cpu_ns: u64,
+    /// Time spent runnable, waiting on a run queue, ns.
+    pub run_wait_ns: u64,
+    /// Times the thread was put on a CPU.
+    pub timeslices: u64,
+}
+
+impl ThreadSchedStat {
+    /// Open the calling thread's statistics (the file stays bound to this thread). `Err` if the
+    /// kernel does not provide them (no `CONFIG_SCHED_INFO`, or no `/proc`).
+    pub fn open_current() -> io::Result<Self> {
+        let file = std::fs::File::open("/proc/thread-self/schedstat")?;
+        let s = Self { file };
+        s.read()?;
+        Ok(s)
+    }
+
+    /// The current reading.
+    pub fn read(&self) -> io::Result<SchedStatReading> {
+        use std::os::unix::fs::FileExt;
+        let mut buf = [0u8; 96];
+        let n = self.file.read_at(&mut buf, 0)?;
+        parse_schedstat(&buf[..n]).ok_or_else(|| {
+            io::Error::new(
+                io::ErrorKind::InvalidData,
+                "unexpected /proc/thread-self/schedstat format",
+            )
+        })
+    }
+}
+
+/// `"<cpu ns> <run-queue wait ns> <timeslices>\n"`.
+fn parse_schedstat(b: &[u8]) -> Option<SchedStatReading> {
+    let mut f = std::str::from_utf8(b)
+        .ok()?
+        .split_ascii_whitespace()
+        .map(|x| x.parse::<u64>().ok());
+    Some(SchedStatReading {
+        cpu_ns: f.next()??,
+        run_wait_ns: f.next()??,
+        timeslices: f.next()??,
+    })
+}
+
 /// Pin the calling thread to `cpus` (indices). EINVAL if none of them exists.
 pub fn set_affinity(cpus: &[usize]) -> io::Result<()> {
     // SAFETY: an all-zero `cpu_set_t` is the empty set (it is a plain bit array).
@@ -227,6 +282,43 @@ pub fn send_signal(pid: u32, sig: i32) -> io::Result<()> {
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    #[test]
+    fn schedstat_is_parsed_and_counts_this_threads_cpu_time() {
+        let r = parse_schedstat(b"123 45 6\n").unwrap();
+        assert_eq!((r.cpu_ns, r.run_wait_ns, r.timeslices), (123, 45, 6));
+        assert_eq!(parse_schedstat(b"123 45\n"), None);
+        assert_eq!(parse_schedstat(b"x 45 6\n"), None);
+        // The file is bound to the thread that opened it: another thread's spinning does not
+        // show up in it, this thread's does.
+        let Ok(stat) = ThreadSchedStat::open_current() else {
+            return; // kernel without per-thread scheduler statistics
+        };
+        let a = stat.read().unwrap();
+        std::thread::spawn(|| spin_cpu_ms(30)).join().unwrap();
+        let b = stat.read().unwrap();
+        spin_cpu_ms(30);
+        let c = stat.read().unwrap();
+        assert!(b.cpu_ns - a.cpu_ns < 20_000_000, "{a:?} {b:?}");
+        assert!(c.cpu_ns - b.cpu_ns >= 29_000_000, "{b:?} {c:?}");
+    }
+
+    /// Busy-loop until the calling thread has used `ms` of CPU time.
+    fn spin_cpu_ms(ms: u64) {
+        let cpu = || {
+            let mut ts = libc::timespec {
+                tv_sec: 0,
+                tv_nsec: 0,
+            };
+            // SAFETY: `ts` is a valid, writable timespec.
+            unsafe { libc::clock_gettime(libc::CLOCK_THREAD_CPUTIME_ID, &mut ts) };
+            ts.tv_sec as u64 * 1_000_000_000 + ts.tv_nsec as u64
+        };
+        let t = cpu();
+        while cpu() < t + ms * 1_000_000 {
+            std::hint::spin_loop();
+        }
+    }
 
     #[test]
     fn clock_is_monotonic_and_sleep_reaches_deadline() {

@@ -10,7 +10,7 @@ use runtime::executor::{
     Control, Cycle, EscalateAction, EventTrace, Executor, ExecutorConfig, ExecutorHandle,
     MissPolicy, SchedPolicy, StopReason, Summary,
 };
-use shm_types::DeadlineEvent;
+use shm_types::{DeadlineEvent, miss_cause};
 use std::time::Duration;
 
 const MS: u64 = 1_000_000;
@@ -124,7 +124,7 @@ fn real_clock_reports_a_deliberately_slow_cycle_as_a_miss() {
         .spawn(|| {
             |c: &Cycle| {
                 if c.index == 10 {
-                    std::thread::sleep(Duration::from_millis(6));
+                    std::thread::sleep(Duration::from_millis(20));
                 }
                 Control::Continue
             }
@@ -139,8 +139,17 @@ fn real_clock_reports_a_deliberately_slow_cycle_as_a_miss() {
         .find(|e| e.cycle == 10)
         .expect("cycle 10 is traced as a miss");
     assert_eq!(slow.missed, 1);
-    assert!(slow.exec_ns >= 6 * MS);
+    assert!(slow.exec_ns >= 20 * MS);
     assert_eq!(slow.thread_name(), "slow-cycle");
+    // The body slept: its time was neither CPU nor run-queue wait, so the cause is blocking
+    // (where the kernel reports per-thread scheduler statistics).
+    if slow.sched_stats == 1 {
+        assert_eq!(slow.miss_cause, miss_cause::BLOCKED, "{slow:?}");
+        assert!(slow.cpu_ns < slow.exec_ns, "{slow:?}");
+        assert!(summary.monitor.misses_by(miss_cause::BLOCKED) >= 1);
+    } else {
+        assert_eq!(slow.miss_cause, miss_cause::UNKNOWN);
+    }
     // Skip policy: at least the release after the miss was skipped.
     assert!(summary.skipped >= 1, "{summary}");
 }
@@ -183,6 +192,9 @@ fn stepped_clock_gives_exact_miss_and_skip_counts() {
         .map(|e| e.cycle)
         .collect();
     assert_eq!(missed, vec![5, 12]);
+    // Scheduler statistics mean nothing against a stepped clock: not measured, cause unknown.
+    assert!(ev.iter().all(|e| e.sched_stats == 0));
+    assert_eq!(s.monitor.misses_by(miss_cause::UNKNOWN), 2);
     // Exact timing on the stepped clock: no lateness, except none at all.
     assert!(ev.iter().all(|e| e.lateness_ns == 0));
     assert_eq!(ev[5].exec_ns, 15 * MS);

@@ -635,12 +635,23 @@ pub struct DeadlineEvent {
     pub lateness_ns: i64,
     /// Execution time of the cycle body, ns.
     pub exec_ns: u64,
+    /// CPU time the thread got from the end of the previous cycle to the end of this one, ns
+    /// (valid if `sched_stats` = 1).
+    pub cpu_ns: u64,
+    /// Time the thread spent runnable but waiting for a CPU over the same span, ns (valid if
+    /// `sched_stats` = 1).
+    pub run_wait_ns: u64,
     /// Consecutive misses including this one.
     pub consecutive_misses: u32,
     /// 1 if the cycle missed its deadline.
     pub missed: u8,
+    /// Why it missed ([`miss_cause`]); `NONE` if it did not.
+    pub miss_cause: u8,
+    /// 1 if `cpu_ns` and `run_wait_ns` were measured (the kernel reports per-thread scheduler
+    /// statistics and the clock is real time).
+    pub sched_stats: u8,
     /// Padding, always 0.
-    pub reserved: [u8; 3],
+    pub reserved: u8,
     /// Thread name, UTF-8, zero-padded.
     pub thread: [u8; THREAD_NAME_LEN],
 }
@@ -673,6 +684,17 @@ impl Validate for DeadlineEvent {
             message: "DeadlineEvent",
         };
         c.count("missed", self.missed as usize, 1)?;
+        c.count("sched_stats", self.sched_stats as usize, 1)?;
+        if self.miss_cause > miss_cause::UNKNOWN {
+            return Err(c.err(
+                "miss_cause",
+                format!(
+                    "{} (codes are 0..={})",
+                    self.miss_cause,
+                    miss_cause::UNKNOWN
+                ),
+            ));
+        }
         if self.period_ns == 0 {
             return Err(c.err("period_ns", "0 (period must be > 0)".into()));
         }
@@ -715,6 +737,39 @@ pub struct Candidate {
     pub chosen: u8,
     /// 1 if the candidate was dropped (unreachable / in collision) and not evaluated.
     pub dropped: u8,
+}
+
+/// Why a periodic cycle missed its deadline ([`DeadlineEvent::miss_cause`]): the largest share
+/// of the time from its release to its end.
+pub mod miss_cause {
+    /// The cycle did not miss.
+    pub const NONE: u8 = 0;
+    /// The thread was running: the body's own work took the time.
+    pub const EXECUTION: u8 = 1;
+    /// The thread was runnable but another task (or non-preemptible kernel work) held the CPU.
+    pub const RUN_QUEUE: u8 = 2;
+    /// The thread was made runnable late: the timer wake-up itself came late (interrupts held
+    /// off, or the hypervisor did not run the virtual CPU), with no run-queue wait to explain it.
+    pub const LATE_WAKEUP: u8 = 3;
+    /// The body was not runnable after waking: it slept or blocked (I/O, a lock, a page fault
+    /// served from disk).
+    pub const BLOCKED: u8 = 4;
+    /// Missed, but the scheduler statistics needed to tell why are unavailable.
+    pub const UNKNOWN: u8 = 5;
+
+    /// A short name for `code` ("execution", "run-queue", "late-wakeup", "blocked", "unknown",
+    /// "none"); codes out of range are "invalid".
+    pub fn name(code: u8) -> &'static str {
+        match code {
+            NONE => "none",
+            EXECUTION => "execution",
+            RUN_QUEUE => "run-queue",
+            LATE_WAKEUP => "late-wakeup",
+            BLOCKED => "blocked",
+            UNKNOWN => "unknown",
+            _ => "invalid",
+        }
+    }
 }
 
 /// Kind of a [`PlannerDecision`].
@@ -871,7 +926,7 @@ mod tests {
         assert_eq!(size_of::<OccupancyGrid>(), 24 + 24 + MAX_GRID_CELLS);
         assert_eq!(size_of::<NavGoal>(), 56);
         assert_eq!(size_of::<NeckGoal>(), 56);
-        assert_eq!(size_of::<DeadlineEvent>(), 24 + 40 + 8 + THREAD_NAME_LEN);
+        assert_eq!(size_of::<DeadlineEvent>(), 24 + 56 + 8 + THREAD_NAME_LEN);
         assert_eq!(size_of::<Candidate>(), 60);
         assert_eq!(size_of::<PlannerDecision>(), 56 + 60 * MAX_CANDIDATES);
         assert_eq!(align_of::<ObjectMap>(), 8);
@@ -1029,6 +1084,9 @@ mod tests {
         assert!(e.thread_name().len() <= THREAD_NAME_LEN);
         assert!(e.thread_name().starts_with("lbv-éé"));
         assert_eq!(e.validate(), Ok(()));
+        e.miss_cause = miss_cause::UNKNOWN + 1;
+        assert_eq!(e.validate().unwrap_err().field, "miss_cause");
+        e.miss_cause = miss_cause::LATE_WAKEUP;
         e.period_ns = 0;
         assert_eq!(e.validate().unwrap_err().field, "period_ns");
 

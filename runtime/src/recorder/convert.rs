@@ -5,7 +5,7 @@ use super::{LatencySummary, LogLevel, MountGeometry, TruthBox};
 use serde::Serialize;
 use shm_types::{
     DeadlineEvent, DepthFrame, MapObject, NavGoal, NeckGoal, ObjectMap, PlannerDecision,
-    RobotState, class_name, decision_kind, goal_kind, planner_state,
+    RobotState, class_name, decision_kind, goal_kind, miss_cause, planner_state,
 };
 
 // ---- producer-side copies (no allocation) --------------------------------------------------
@@ -857,8 +857,12 @@ struct DeadlineJson<'a> {
     budget_ns: u64,
     lateness_ns: i64,
     exec_ns: u64,
+    cpu_ns: u64,
+    run_wait_ns: u64,
+    sched_stats: bool,
     consecutive_misses: u32,
     miss: bool,
+    miss_cause: &'static str,
 }
 
 /// `vpsom.DeadlineEvent`.
@@ -871,8 +875,12 @@ pub(super) fn deadline(e: &DeadlineEvent, out: &mut Vec<u8>) {
         budget_ns: e.budget_ns,
         lateness_ns: e.lateness_ns,
         exec_ns: e.exec_ns,
+        cpu_ns: e.cpu_ns,
+        run_wait_ns: e.run_wait_ns,
+        sched_stats: e.sched_stats != 0,
         consecutive_misses: e.consecutive_misses,
         miss: e.missed != 0,
+        miss_cause: miss_cause::name(e.miss_cause),
     };
     to(out, &msg);
 }

@@ -474,8 +474,12 @@ pub fn deadline_event() -> Value {
             ("budget_ns", uint()),
             ("lateness_ns", int()),
             ("exec_ns", uint()),
+            ("cpu_ns", uint()),
+            ("run_wait_ns", uint()),
+            ("sched_stats", boolean()),
             ("consecutive_misses", uint()),
             ("miss", boolean()),
+            ("miss_cause", string()),
         ],
     )
 }

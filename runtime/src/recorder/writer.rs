@@ -100,10 +100,9 @@ struct StatsJson<'a> {
 
 /// CPU time of the calling thread, ns, from `/proc/thread-self/schedstat` (0 if unavailable).
 pub(crate) fn thread_cpu_ns() -> u64 {
-    std::fs::read_to_string("/proc/thread-self/schedstat")
-        .ok()
-        .and_then(|s| s.split_whitespace().next()?.parse().ok())
-        .unwrap_or(0)
+    crate::os::ThreadSchedStat::open_current()
+        .and_then(|s| s.read())
+        .map_or(0, |r| r.cpu_ns)
 }
 
 impl WriterState {
