@@ -177,6 +177,11 @@ pub struct RunConfig {
     /// `SCHED_FIFO` priority of the mapper's thread (below the LBV's `executor.priority`, so
     /// depth frames become maps promptly under CPU load); 0 = `SCHED_OTHER`.
     pub mapper_priority: i32,
+    /// CPU the planner's LBV thread is pinned to (-1 = `executor.cpus`).
+    pub lbv_cpu: i32,
+    /// CPU of the LBV thread's backup waker (`executor.backup_cpu`; -1 = none): wakes the LBV
+    /// there when its own CPU stalls at a release. Needs `lbv_cpu`, a different CPU.
+    pub lbv_backup_cpu: i32,
 }
 
 impl Default for RunConfig {
@@ -189,6 +194,8 @@ impl Default for RunConfig {
             max_restarts: 2,
             stop_grace_s: 5.0,
             mapper_priority: 70,
+            lbv_cpu: 0,
+            lbv_backup_cpu: 1,
         }
     }
 }
@@ -215,6 +222,23 @@ impl RunConfig {
             "run.mapper_priority",
             self.mapper_priority,
             "must be in [0, 98] (0 = SCHED_OTHER)",
+        )?;
+        for (key, v) in [
+            ("run.lbv_cpu", self.lbv_cpu),
+            ("run.lbv_backup_cpu", self.lbv_backup_cpu),
+        ] {
+            c.require(
+                (-1..1024).contains(&v),
+                key,
+                v,
+                "must be a CPU index below 1024, or -1",
+            )?;
+        }
+        c.require(
+            self.lbv_backup_cpu < 0 || (self.lbv_cpu >= 0 && self.lbv_cpu != self.lbv_backup_cpu),
+            "run.lbv_backup_cpu",
+            self.lbv_backup_cpu,
+            "needs run.lbv_cpu set to another CPU",
         )?;
         c.in_range("run.stop_grace_s", self.stop_grace_s, 0.1, 600.0)
     }

@@ -103,6 +103,8 @@ struct Samples {
     missed: Vec<DeadlineEvent>,
     /// Deadline budget per thread, ns.
     budget: BTreeMap<String, u64>,
+    /// Cycles per thread that the executor's backup waker woke.
+    backup_wakes: BTreeMap<String, u64>,
     neck_seen: u64,
     decisions_seen: [u64; 2],
     lost: u64,
@@ -189,6 +191,7 @@ pub fn run(
         misses,
         missed,
         budget,
+        backup_wakes,
         neck_seen,
         decisions_seen,
         lost,
@@ -207,6 +210,7 @@ pub fn run(
         .flat_map(|n| exec[n].iter().copied())
         .collect();
     let lbv_misses: u64 = lbv_names.iter().map(|n| misses[n]).sum();
+    let lbv_backup_wakes: u64 = lbv_names.iter().map(|n| backup_wakes[n]).sum();
     let lbv_missed: Vec<&DeadlineEvent> = missed
         .iter()
         .filter(|m| lbv_names.iter().any(|n| n == m.thread_name()))
@@ -241,7 +245,8 @@ pub fn run(
     md += &table_row(&["GBV round".into()], &p_gbv);
     let causes = count_causes(&lbv_missed);
     md += &format!(
-        "\nLBV deadline misses: {lbv_misses}{} over {} cycles. Samples lost to overwrite on the harness's \
+        "\nLBV deadline misses: {lbv_misses}{} over {} cycles; {lbv_backup_wakes} cycles were woken by \
+         the executor's backup waker (the LBV's own CPU had not woken it in time). Samples lost to overwrite on the harness's \
          subscribers (not the pipeline's): {lost}. Received while measuring: {neck_seen} neck goals \
          (those with `frame_stamp_ns` = 0 are not counted above), {} GBV and {} LBV decisions.\n",
         if causes.is_empty() {
@@ -322,6 +327,7 @@ pub fn run(
             "measured_s": measured.as_secs_f64(),
             "frame_to_map": p_map, "frame_to_lbv": p_lbv, "lbv_frame_age": p_age, "lbv_exec": p_exec,
             "lbv_threads": lbv_names, "lbv_deadline_misses": lbv_misses, "gbv_round": p_gbv,
+            "lbv_backup_wakes": lbv_backup_wakes,
             "lbv_miss_causes": causes.iter().cloned().collect::<BTreeMap<_, _>>(),
             "lbv_missed_cycles": lbv_missed.iter().map(|m| json!({
                 "thread": m.thread_name(), "cycle": m.cycle, "lateness_ns": m.lateness_ns,
@@ -660,6 +666,7 @@ fn session(
                 acc.exec.entry(name.clone()).or_default().push(ev.exec_ns);
                 *acc.misses.entry(name.clone()).or_default() += ev.missed as u64;
                 acc.budget.insert(name.clone(), ev.budget_ns);
+                *acc.backup_wakes.entry(name.clone()).or_default() += u64::from(ev.backup_wake);
                 if ev.missed != 0 {
                     acc.missed.push(*ev);
                 }
@@ -669,7 +676,8 @@ fn session(
                     &json!({
                         "cycle": ev.cycle, "lateness_ns": ev.lateness_ns, "exec_ns": ev.exec_ns,
                         "cpu_ns": ev.cpu_ns, "run_wait_ns": ev.run_wait_ns,
-                        "sched_stats": ev.sched_stats, "missed": ev.missed,
+                        "sched_stats": ev.sched_stats, "backup_wake": ev.backup_wake,
+                        "missed": ev.missed,
                         "miss_cause": miss_cause::name(ev.miss_cause),
                     }),
                 )?;

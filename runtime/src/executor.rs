@@ -12,6 +12,10 @@
 //! - [`MissPolicy::Hold`]: the executor runs once at once (late) and resumes the grid; the body
 //!   sees [`Cycle::previous_missed`] so it can hold its last output.
 //!
+//! With `backup_cpu` set, a backup waker on that CPU wakes the thread there when its own timer
+//! has not woken it `backup_delay_us` after a release (see `waker.rs`: a VM stalls one virtual
+//! CPU at a time).
+//!
 //! Each cycle also reads the thread's scheduler statistics (`/proc/thread-self/schedstat`, one
 //! `pread` after the body), so every miss carries its cause ([`miss_cause_of`]): the body's own
 //! execution, waiting for a CPU, a wake-up that came late, or blocking inside the body.
@@ -29,6 +33,7 @@ use crate::clock::Clock;
 use crate::config::{Checker, ConfigError};
 pub use crate::os::{SchedStatReading, ThreadSchedStat};
 use crate::pool::PoolConfig;
+use crate::waker::BackupWaker;
 use crossbeam::channel::Sender;
 use hdrhistogram::Histogram;
 use serde::{Deserialize, Serialize};
@@ -102,6 +107,13 @@ pub struct ExecutorConfig {
     /// While the process runs, hold `/dev/cpu_dma_latency` at this many µs (no deep idle
     /// states; cyclictest does the same by default); -1 = leave the system's setting.
     pub cpu_dma_latency_us: i32,
+    /// CPU of the backup waker (-1 = none): a second thread at the executor's priority that
+    /// wakes the executor thread on this CPU when its own timer has not woken it
+    /// `backup_delay_us` after a release (a VM stalls one virtual CPU at a time). Needs `cpus`
+    /// set, without this CPU, and the real clock.
+    pub backup_cpu: i32,
+    /// How long after a release the backup waker steps in, µs.
+    pub backup_delay_us: u64,
     /// Budget as a fraction of the period, (0, 1]: a cycle misses if it ends after release+budget.
     pub budget_fraction: f64,
     /// Policy after a miss.
@@ -126,6 +138,8 @@ impl Default for ExecutorConfig {
             cpus: Vec::new(),
             spin_margin_us: 200,
             cpu_dma_latency_us: 0,
+            backup_cpu: -1,
+            backup_delay_us: 1000,
             budget_fraction: 1.0,
             miss_policy: MissPolicy::Skip,
             escalate_after: 5,
@@ -170,6 +184,26 @@ impl ExecutorConfig {
             "executor.cpu_dma_latency_us",
             self.cpu_dma_latency_us,
             "must be in [-1, 10000000] (-1 = leave the system setting)",
+        )?;
+        c.require(
+            (-1..1024).contains(&self.backup_cpu),
+            "executor.backup_cpu",
+            self.backup_cpu,
+            "must be a CPU index below 1024, or -1 for none",
+        )?;
+        if let Ok(cpu) = usize::try_from(self.backup_cpu) {
+            c.require(
+                !self.cpus.is_empty() && !self.cpus.contains(&cpu),
+                "executor.backup_cpu",
+                self.backup_cpu,
+                "needs executor.cpus set to the executor's own CPUs, without the backup CPU",
+            )?;
+        }
+        c.require(
+            (10..=1_000_000).contains(&self.backup_delay_us),
+            "executor.backup_delay_us",
+            self.backup_delay_us,
+            "must be in [10, 1000000]",
         )?;
         c.require(
             self.budget_fraction.is_finite()
@@ -231,6 +265,8 @@ pub struct SchedReport {
     pub cpus: Option<Vec<usize>>,
     /// The CPU wake-up latency limit the process holds, µs, if one was requested and granted.
     pub cpu_dma_latency_us: Option<i32>,
+    /// The backup waker's CPU, if one was requested and runs.
+    pub backup_cpu: Option<usize>,
     /// One line per refused request (empty if everything was granted).
     pub refusals: Vec<String>,
 }
@@ -248,6 +284,9 @@ impl fmt::Display for SchedReport {
         }
         if let Some(us) = self.cpu_dma_latency_us {
             write!(f, ", cpu latency {us} µs")?;
+        }
+        if let Some(c) = self.backup_cpu {
+            write!(f, ", backup waker on CPU {c}")?;
         }
         Ok(())
     }
@@ -355,8 +394,36 @@ pub fn apply_sched(thread: &str, cfg: &ExecutorConfig) -> SchedReport {
         mlocked,
         cpus,
         cpu_dma_latency_us,
+        backup_cpu: None,
         refusals,
     }
+}
+
+/// Start the backup waker `cfg` asks for (on the executor thread, after [`apply_sched`]),
+/// recording the outcome in `sched`. Only for the real clock, and only if the thread's pinning
+/// was granted.
+fn start_backup(
+    thread: &str,
+    cfg: &ExecutorConfig,
+    real_clock: bool,
+    sched: &mut SchedReport,
+) -> Option<BackupWaker> {
+    let cpu = usize::try_from(cfg.backup_cpu).ok()?;
+    let why = match (&sched.cpus, real_clock) {
+        (_, false) => "the clock is not real time".to_string(),
+        (None, _) => "the thread is not pinned".to_string(),
+        (Some(home), true) => match BackupWaker::start(thread, cpu, home, sched.fifo) {
+            Ok(w) => {
+                sched.backup_cpu = Some(cpu);
+                return Some(w);
+            }
+            Err(why) => why,
+        },
+    };
+    let msg = format!("backup waker on CPU {cpu} not started: {why}");
+    log_once("backup", &format!("thread '{thread}': {msg}"));
+    sched.refusals.push(msg);
+    None
 }
 
 /// A latency histogram: 1 ns .. 60 s, 3 significant digits (what [`DeadlineMonitor`] records
@@ -703,6 +770,8 @@ pub struct Summary {
     pub skipped: u64,
     /// Deadline events that could not be queued (sink full or gone).
     pub events_dropped: u64,
+    /// Cycles whose wake-up the backup waker did (the thread's own timer was late).
+    pub backup_wakes: u64,
     /// The monitor (counts and histograms).
     pub monitor: DeadlineMonitor,
     /// Lateness percentiles.
@@ -715,7 +784,7 @@ impl fmt::Display for Summary {
     fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
         writeln!(
             f,
-            "{}: {} cycles, {} misses{} (max {} in a row), {} skipped, {} escalations, {:?}, {}",
+            "{}: {} cycles, {} misses{} (max {} in a row), {} skipped, {}{} escalations, {:?}, {}",
             self.name,
             self.monitor.cycles(),
             self.monitor.misses(),
@@ -725,6 +794,10 @@ impl fmt::Display for Summary {
             },
             self.monitor.max_consecutive(),
             self.skipped,
+            match self.sched.backup_cpu {
+                Some(_) => format!("{} backup wake-ups, ", self.backup_wakes),
+                None => String::new(),
+            },
             self.monitor.escalations(),
             self.reason,
             self.sched
@@ -878,11 +951,17 @@ impl Executor {
         let thread = std::thread::Builder::new()
             .name(name.clone())
             .spawn(move || {
-                let sched = apply_sched(&self.name, &self.config);
+                let mut sched = apply_sched(&self.name, &self.config);
+                let backup = start_backup(
+                    &self.name,
+                    &self.config,
+                    self.clock.is_real_time(),
+                    &mut sched,
+                );
                 let body = make_body();
                 // The spawner waits for this; if it has gone, running is pointless.
                 let _ = ready_tx.send(sched.clone());
-                self.run(body, sched, &thread_shared)
+                self.run(body, sched, backup, &thread_shared)
             })
             .map_err(|source| ExecutorError::Spawn {
                 name: name.clone(),
@@ -914,6 +993,7 @@ impl Executor {
         self,
         mut body: B,
         sched: SchedReport,
+        mut backup: Option<BackupWaker>,
         shared: &Shared,
     ) -> Summary {
         let clock = self.clock;
@@ -930,6 +1010,9 @@ impl Executor {
         let read_stat = || schedstat.as_ref().and_then(|s| s.read().ok());
         let mut last_stat = read_stat();
         let start = self.start_ns.unwrap_or_else(|| clock.now_ns());
+        if let Some(w) = backup.as_mut() {
+            w.begin(start, period, cfg.backup_delay_us * 1000);
+        }
         let mut grid: u64 = 0;
         let mut skipped: u64 = 0;
         let mut events_dropped: u64 = 0;
@@ -942,7 +1025,13 @@ impl Executor {
                 break StopReason::MaxCycles;
             }
             let release = start + grid * period;
-            clock.sleep_until_spin(release, margin);
+            let rescued = match &backup {
+                Some(w) => w.sleep_until(|| clock.now_ns(), release, margin),
+                None => {
+                    clock.sleep_until_spin(release, margin);
+                    false
+                }
+            };
             let wake = clock.now_ns();
             let cycle = Cycle {
                 index: monitor.cycles(),
@@ -966,7 +1055,10 @@ impl Executor {
             if let Some(sink) = &self.events
                 && (cfg.trace == EventTrace::All || (cfg.trace == EventTrace::Misses && v.missed))
                 && sink
-                    .try_send(monitor.event(cycle.index, release, wake, end, sched, &v))
+                    .try_send(DeadlineEvent {
+                        backup_wake: rescued as u8,
+                        ..monitor.event(cycle.index, release, wake, end, sched, &v)
+                    })
                     .is_err()
             {
                 events_dropped += 1;
@@ -1003,6 +1095,8 @@ impl Executor {
             skipped += next - grid - 1;
             grid = next;
         };
+        let backup_wakes = backup.as_ref().map_or(0, BackupWaker::rescues);
+        drop(backup);
         shared.state.store(STATE_FINISHED, Ordering::Release);
         Summary {
             name: self.name,
@@ -1010,6 +1104,7 @@ impl Executor {
             sched,
             skipped,
             events_dropped,
+            backup_wakes,
             lateness: Stats::of(monitor.lateness()),
             exec: Stats::of(monitor.exec()),
             monitor,

@@ -11,3 +11,4 @@ mod os;
 pub mod pool;
 pub mod ports;
 pub mod recorder;
+mod waker;

@@ -172,6 +172,12 @@ fn parse_schedstat(b: &[u8]) -> Option<SchedStatReading> {
 
 /// Pin the calling thread to `cpus` (indices). EINVAL if none of them exists.
 pub fn set_affinity(cpus: &[usize]) -> io::Result<()> {
+    set_thread_affinity(0, cpus)
+}
+
+/// Pin thread `tid` of this process (0 = the calling thread) to `cpus`. EINVAL if none of
+/// them exists.
+pub fn set_thread_affinity(tid: libc::pid_t, cpus: &[usize]) -> io::Result<()> {
     // SAFETY: an all-zero `cpu_set_t` is the empty set (it is a plain bit array).
     let mut set: libc::cpu_set_t = unsafe { std::mem::zeroed() };
     let max = 8 * std::mem::size_of::<libc::cpu_set_t>();
@@ -182,9 +188,46 @@ pub fn set_affinity(cpus: &[usize]) -> io::Result<()> {
         // SAFETY: `c` is below the set's capacity (checked above); `set` is a valid cpu_set_t.
         unsafe { libc::CPU_SET(c, &mut set) };
     }
-    // SAFETY: `set` is a valid cpu_set_t of the size passed; pid 0 is the calling thread; the
-    // kernel only reads it.
-    check(unsafe { libc::sched_setaffinity(0, std::mem::size_of::<libc::cpu_set_t>(), &set) })
+    // SAFETY: `set` is a valid cpu_set_t of the size passed; the kernel only reads it.
+    check(unsafe { libc::sched_setaffinity(tid, std::mem::size_of::<libc::cpu_set_t>(), &set) })
+}
+
+/// Sleep while `word` holds `expected`, until `CLOCK_MONOTONIC` reaches `deadline_ns`
+/// (absolute) or [`futex_wake`] is called on `word`. Returns on a wake-up, a timeout, a signal or
+/// if `word` no longer held `expected`; the caller re-checks its condition.
+pub fn futex_wait_until(word: &std::sync::atomic::AtomicU32, expected: u32, deadline_ns: u64) {
+    let ts = libc::timespec {
+        tv_sec: (deadline_ns / 1_000_000_000) as libc::time_t,
+        tv_nsec: (deadline_ns % 1_000_000_000) as libc::c_long,
+    };
+    // SAFETY: `word` is a valid, aligned 32-bit atomic that outlives the call; `ts` is a valid
+    // timespec; FUTEX_WAIT_BITSET takes an absolute CLOCK_MONOTONIC timeout; the unused
+    // second address is null. The result needs no handling: every outcome (woken, ETIMEDOUT,
+    // EAGAIN, EINTR) sends the caller back to its own check.
+    unsafe {
+        libc::syscall(
+            libc::SYS_futex,
+            word.as_ptr(),
+            libc::FUTEX_WAIT_BITSET | libc::FUTEX_PRIVATE_FLAG,
+            expected,
+            &ts as *const libc::timespec,
+            std::ptr::null::<u32>(),
+            libc::FUTEX_BITSET_MATCH_ANY,
+        )
+    };
+}
+
+/// Wake the threads sleeping in [`futex_wait_until`] on `word`.
+pub fn futex_wake(word: &std::sync::atomic::AtomicU32) {
+    // SAFETY: `word` is a valid, aligned 32-bit atomic; FUTEX_WAKE only reads the address.
+    unsafe {
+        libc::syscall(
+            libc::SYS_futex,
+            word.as_ptr(),
+            libc::FUTEX_WAKE | libc::FUTEX_PRIVATE_FLAG,
+            i32::MAX,
+        )
+    };
 }
 
 /// The CPUs the calling thread may run on.

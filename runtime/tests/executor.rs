@@ -5,7 +5,7 @@
 //! runtime; hangs are guarded by watchdogs.
 
 use crossbeam::channel::{Receiver, bounded};
-use runtime::clock::{StepMode, SteppedClock};
+use runtime::clock::{Clock, MonotonicClock, StepMode, SteppedClock};
 use runtime::executor::{
     Control, Cycle, EscalateAction, EventTrace, Executor, ExecutorConfig, ExecutorHandle,
     MissPolicy, SchedPolicy, StopReason, Summary,
@@ -423,4 +423,111 @@ fn cpu_latency_limit_is_held_while_the_process_runs_or_the_refusal_is_reported()
         runtime::executor::apply_sched("latency-off", &off).cpu_dma_latency_us,
         None
     );
+}
+
+/// A thread on CPU 0 that outranks the executor holds that CPU across two releases: the
+/// executor's own wake-up would wait for it (~28 ms), but its backup waker on CPU 1 moves it
+/// there and wakes it `backup_delay_us` after each release. Needs SCHED_FIFO and two CPUs
+/// (skipped otherwise, saying so).
+#[test]
+fn backup_waker_wakes_the_thread_on_its_cpu_when_the_home_cpu_is_held() {
+    let period = 20 * MS;
+    let start = MonotonicClock::new().now_ns() + 200 * MS;
+    let (tx, rx) = bounded(64);
+    let cfg = ExecutorConfig {
+        cpus: vec![0],
+        backup_cpu: 1,
+        backup_delay_us: 1000,
+        spin_margin_us: 0,
+        budget_fraction: 0.25,
+        trace: EventTrace::All,
+        ..ExecutorConfig::default()
+    };
+    let handle = Executor::builder("backed-up", Duration::from_nanos(period))
+        .config(&cfg)
+        .events(tx)
+        .start_at(start)
+        .max_cycles(20)
+        .spawn(|| |_: &Cycle| Control::Continue)
+        .unwrap();
+    let sched = handle.sched().clone();
+    if sched.fifo.is_none() || sched.backup_cpu.is_none() {
+        eprintln!("skipped: needs SCHED_FIFO and a second CPU ({sched})");
+        join_within(handle, 30);
+        return;
+    }
+    assert!(
+        sched.to_string().contains("backup waker on CPU 1"),
+        "{sched}"
+    );
+    // The hog: SCHED_FIFO 90 on CPU 0 from 2 ms before release 10 to 28 ms after it.
+    let hog = std::thread::spawn(move || {
+        let hog_cfg = ExecutorConfig {
+            priority: 90,
+            cpus: vec![0],
+            mlockall: false,
+            cpu_dma_latency_us: -1,
+            ..ExecutorConfig::default()
+        };
+        let got = runtime::executor::apply_sched("hog", &hog_cfg);
+        assert_eq!(got.fifo, Some(90), "{got}");
+        let clock = MonotonicClock::new();
+        let from = start + 10 * period - 2 * MS;
+        clock.sleep_until(from);
+        while clock.now_ns() < from + 30 * MS {
+            std::hint::spin_loop();
+        }
+    });
+    let s = join_within(handle, 60);
+    hog.join().unwrap();
+    let ev = drain(&rx);
+    for k in [10, 11] {
+        let e = ev.iter().find(|e| e.cycle == k).expect("cycle traced");
+        assert_eq!(e.backup_wake, 1, "cycle {k}: {e:?}");
+        assert!(
+            e.lateness_ns < 10 * MS as i64,
+            "cycle {k} woke {} ms late although the backup waker was due after 1 ms",
+            e.lateness_ns as f64 / 1e6
+        );
+    }
+    assert!(s.backup_wakes >= 2, "{s}");
+    assert!(s.to_string().contains("backup wake-ups"), "{s}");
+}
+
+#[test]
+fn backup_cpu_settings_are_checked() {
+    let check = |cfg: ExecutorConfig| {
+        cfg.validate(&runtime::config::Checker::new("test.toml"))
+            .map_err(|e| e.to_string())
+    };
+    let e = check(ExecutorConfig {
+        backup_cpu: 1,
+        ..ExecutorConfig::default()
+    })
+    .unwrap_err();
+    assert!(
+        e.contains("executor.backup_cpu") && e.contains("needs executor.cpus"),
+        "{e}"
+    );
+    let e = check(ExecutorConfig {
+        cpus: vec![0, 1],
+        backup_cpu: 1,
+        ..ExecutorConfig::default()
+    })
+    .unwrap_err();
+    assert!(e.contains("without the backup CPU"), "{e}");
+    assert!(
+        check(ExecutorConfig {
+            cpus: vec![0],
+            backup_cpu: 1,
+            ..ExecutorConfig::default()
+        })
+        .is_ok()
+    );
+    let e = check(ExecutorConfig {
+        backup_delay_us: 0,
+        ..ExecutorConfig::default()
+    })
+    .unwrap_err();
+    assert!(e.contains("executor.backup_delay_us"), "{e}");
 }

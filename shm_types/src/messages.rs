@@ -650,8 +650,8 @@ pub struct DeadlineEvent {
     /// 1 if `cpu_ns` and `run_wait_ns` were measured (the kernel reports per-thread scheduler
     /// statistics and the clock is real time).
     pub sched_stats: u8,
-    /// Padding, always 0.
-    pub reserved: u8,
+    /// 1 if the executor's backup waker woke the thread for this cycle (its own timer was late).
+    pub backup_wake: u8,
     /// Thread name, UTF-8, zero-padded.
     pub thread: [u8; THREAD_NAME_LEN],
 }
@@ -685,6 +685,7 @@ impl Validate for DeadlineEvent {
         };
         c.count("missed", self.missed as usize, 1)?;
         c.count("sched_stats", self.sched_stats as usize, 1)?;
+        c.count("backup_wake", self.backup_wake as usize, 1)?;
         if self.miss_cause > miss_cause::UNKNOWN {
             return Err(c.err(
                 "miss_cause",

@@ -325,6 +325,23 @@ pub fn mapper_node(args: &RunArgs, cfg: &Config) -> anyhow::Result<()> {
     Ok(())
 }
 
+/// The LBV thread's executor settings: `[executor]` with every cycle traced, the LBV budget, and
+/// `[run] lbv_cpu` / `lbv_backup_cpu` when set.
+fn lbv_executor_config(cfg: &Config, budget_fraction: f64) -> runtime::executor::ExecutorConfig {
+    let mut e = runtime::executor::ExecutorConfig {
+        trace: runtime::executor::EventTrace::All,
+        budget_fraction,
+        ..cfg.executor.clone()
+    };
+    if let Ok(cpu) = usize::try_from(cfg.run.lbv_cpu) {
+        e.cpus = vec![cpu];
+    }
+    if cfg.run.lbv_backup_cpu >= 0 {
+        e.backup_cpu = cfg.run.lbv_backup_cpu;
+    }
+    e
+}
+
 /// `vpsom node planner`: the LBV on a deadline-monitored periodic thread at `planner.lbv_hz`
 /// (simulated); chassis-goal rounds (GBV evaluation) on the low-priority worker pool, polled
 /// without waiting. Publishes neck goals, nav goals, decisions and deadline events; exits 0
@@ -339,11 +356,7 @@ pub fn planner_node(args: &RunArgs, cfg: &Config) -> anyhow::Result<()> {
     // The budget is execution time on this machine: wall milliseconds, whatever the time scale.
     let budget_fraction = (cfg.planner.lbv_budget_ms * 1e-3 / period.as_secs_f64()).min(1.0);
     let exec = Executor::builder("lbv", period)
-        .config(&runtime::executor::ExecutorConfig {
-            trace: runtime::executor::EventTrace::All,
-            budget_fraction,
-            ..cfg.executor.clone()
-        })
+        .config(&lbv_executor_config(cfg, budget_fraction))
         .events(events_tx)
         .spawn(move || {
             let mut host = match PlannerHost::new(&cfg2, &ns, gbv_load, events_rx) {

@@ -477,6 +477,7 @@ pub fn deadline_event() -> Value {
             ("cpu_ns", uint()),
             ("run_wait_ns", uint()),
             ("sched_stats", boolean()),
+            ("backup_wake", boolean()),
             ("consecutive_misses", uint()),
             ("miss", boolean()),
             ("miss_cause", string()),
