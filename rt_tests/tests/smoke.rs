@@ -68,6 +68,14 @@ fn smoke_writes_every_report_and_the_load_ends_with_the_harness() {
     assert!(e["results"]["frame_to_map"]["count"].as_u64().unwrap() > 5);
     assert!(e["results"]["lbv_exec"]["count"].as_u64().unwrap() > 5);
     assert!(e["load"].as_str().unwrap().contains("built-in"));
+    // The cyclictest probe ran beside the pipeline, or the report says why it did not.
+    let probe = &e["results"]["probe"];
+    assert!(
+        probe["threads"].as_array().is_some_and(|t| !t.is_empty())
+            || probe["error"].as_str().is_some_and(|w| !w.is_empty()),
+        "{probe}"
+    );
+    assert!(e["results"]["lbv_backup_wakes"].is_u64(), "{e}");
     // The stress workers exited with the harness (they are our children's children: none left).
     let ps = Command::new("ps").args(["-eo", "args"]).output().unwrap();
     let me = Path::new(env!("CARGO_BIN_EXE_vpsom-rt-tests"));

@@ -9,15 +9,23 @@
 //! (SCHED_FIFO) therefore never waits on the pool. Jobs may use rayon parallelism inside (it runs
 //! on this pool's threads). A panicking job yields `Err(JobPanicked)` instead of aborting.
 //!
-//! Allocation: `try_submit` boxes the job (rayon's queue), one small allocation per submission.
+//! No lock is shared with the workers: `try_submit` puts the job on a lock-free queue and wakes a
+//! dispatcher thread (`SCHED_OTHER`) with a bare futex wake, and the dispatcher hands it to rayon.
+//! Calling rayon from the submitting thread would take the mutex of a sleeping worker to wake it;
+//! a `SCHED_IDLE` worker preempted while holding it (it may not run again for a long time under
+//! CPU load) would block a real-time caller for as long: a priority inversion.
+//!
+//! Allocation: `try_submit` boxes the job, one small allocation per submission.
 
 use crate::config::{Checker, ConfigError};
 use crossbeam::channel::{Receiver, Sender};
+use crossbeam::queue::ArrayQueue;
 use serde::Deserialize;
 use std::fmt;
 use std::panic::AssertUnwindSafe;
 use std::sync::Arc;
-use std::sync::atomic::{AtomicU64, AtomicUsize, Ordering};
+use std::sync::atomic::{AtomicBool, AtomicU32, AtomicU64, AtomicUsize, Ordering};
+use std::thread::JoinHandle;
 use std::time::Duration;
 
 /// How pool threads lower their priority.
@@ -156,10 +164,49 @@ pub enum PoolError {
     },
 }
 
+/// A job as the dispatcher hands it to rayon.
+type Job = Box<dyn FnOnce() + Send>;
+
+/// Between `try_submit` and the dispatcher thread: no locks.
+struct Handoff {
+    queue: ArrayQueue<Job>,
+    /// Futex the dispatcher sleeps on; 1 = jobs (or stop) pending.
+    word: AtomicU32,
+    stop: AtomicBool,
+}
+
+impl Handoff {
+    fn wake(&self) {
+        self.word.store(1, Ordering::SeqCst);
+        crate::os::futex_wake(&self.word);
+    }
+}
+
+/// The dispatcher: hands queued jobs to rayon until stopped.
+fn dispatch(h: &Handoff, pool: &rayon::ThreadPool) {
+    // Created by whoever built the pool (possibly a SCHED_FIFO thread): run as a normal thread.
+    let _ = crate::os::set_other();
+    loop {
+        while let Some(job) = h.queue.pop() {
+            pool.spawn(job);
+        }
+        if h.stop.load(Ordering::Acquire) {
+            return;
+        }
+        h.word.store(0, Ordering::SeqCst);
+        if h.queue.is_empty() && !h.stop.load(Ordering::Acquire) {
+            let deadline = crate::os::monotonic_ns() + 1_000_000_000;
+            crate::os::futex_wait_until(&h.word, 0, deadline);
+        }
+    }
+}
+
 /// A low-priority pool computing `R`s off the caller's thread.
 pub struct WorkerPool<R: Send + 'static> {
     name: String,
-    pool: rayon::ThreadPool,
+    pool: Arc<rayon::ThreadPool>,
+    handoff: Arc<Handoff>,
+    dispatcher: Option<JoinHandle<()>>,
     tx: Sender<Done<R>>,
     rx: Receiver<Done<R>>,
     outstanding: Arc<AtomicUsize>,
@@ -216,9 +263,25 @@ impl<R: Send + 'static> WorkerPool<R> {
             }
         }
         let (tx, rx) = crossbeam::channel::bounded(cfg.queue);
+        let pool = Arc::new(pool);
+        let handoff = Arc::new(Handoff {
+            queue: ArrayQueue::new(cfg.queue.max(1)),
+            word: AtomicU32::new(0),
+            stop: AtomicBool::new(false),
+        });
+        let (h, p) = (Arc::clone(&handoff), Arc::clone(&pool));
+        let dispatcher = std::thread::Builder::new()
+            .name(format!("{name}-dispatch"))
+            .spawn(move || dispatch(&h, &p))
+            .map_err(|e| PoolError::Build {
+                name: name.into(),
+                reason: format!("cannot spawn the dispatcher thread: {e}"),
+            })?;
         Ok(Self {
             name: name.into(),
             pool,
+            handoff,
+            dispatcher: Some(dispatcher),
             tx,
             rx,
             outstanding: Arc::new(AtomicUsize::new(0)),
@@ -243,7 +306,7 @@ impl<R: Send + 'static> WorkerPool<R> {
         }
         let id = self.next_id.fetch_add(1, Ordering::Relaxed);
         let tx = self.tx.clone();
-        self.pool.spawn(move || {
+        let job: Job = Box::new(move || {
             let result = std::panic::catch_unwind(AssertUnwindSafe(job)).map_err(|p| {
                 JobPanicked(
                     p.downcast_ref::<&str>()
@@ -256,6 +319,11 @@ impl<R: Send + 'static> WorkerPool<R> {
             // gone the result is simply dropped.
             let _ = tx.try_send(Done { id, result });
         });
+        // Cannot be full: it holds at most the outstanding jobs, and its capacity is the limit.
+        if self.handoff.queue.push(job).is_err() {
+            unreachable!("hand-off queue full with at most `queue` jobs outstanding");
+        }
+        self.handoff.wake();
         Ok(id)
     }
 
@@ -293,6 +361,16 @@ impl<R: Send + 'static> WorkerPool<R> {
     /// blocks the caller — not for the LBV thread.
     pub fn install<T: Send, OP: FnOnce() -> T + Send>(&self, op: OP) -> T {
         self.pool.install(op)
+    }
+}
+
+impl<R: Send + 'static> Drop for WorkerPool<R> {
+    fn drop(&mut self) {
+        self.handoff.stop.store(true, Ordering::Release);
+        self.handoff.wake();
+        if let Some(d) = self.dispatcher.take() {
+            let _ = d.join();
+        }
     }
 }
 
