@@ -1244,43 +1244,35 @@ mod tests {
 
     #[test]
     fn a_miss_is_put_down_to_the_largest_share_of_its_time() {
-        let s = |cpu_ns, run_wait_ns| {
-            Some(CycleSched {
+        use miss_cause::{BLOCKED, EXECUTION, LATE_WAKEUP, RUN_QUEUE};
+        const MS: u64 = 1_000_000;
+        // (lateness, execution, CPU, run-queue wait, cause); budget 5 ms.
+        let cases = [
+            // Woke 7 ms late, ran 0.3 ms, never waited for a CPU: the timer was late.
+            (7 * MS, MS * 3 / 10, MS * 3 / 10, 0, LATE_WAKEUP),
+            // Woke 7 ms late, but 6.5 ms of it runnable on a run queue: the CPU was taken.
+            (7 * MS, MS * 3 / 10, MS * 3 / 10, MS * 13 / 2, RUN_QUEUE),
+            // On time, 6 ms of computing.
+            (MS / 100, 6 * MS, 6 * MS, 0, EXECUTION),
+            // On time, 6 ms in the body but 1 ms of CPU: it blocked.
+            (MS / 100, 6 * MS, MS, 0, BLOCKED),
+            // Shares: cpu 2, wait 1.5, late 3 − 1.5 = 1.5, blocked 6 − 2 − 1.5 − 1.5 = 1.
+            (3 * MS, 3 * MS, 2 * MS, MS * 3 / 2, EXECUTION),
+            // CPU time read across the cycle boundary can exceed the cycle: no underflow.
+            (0, 1_000, 5_000, 5_000, EXECUTION),
+        ];
+        for (lateness, exec, cpu_ns, run_wait_ns, want) in cases {
+            let sched = Some(CycleSched {
                 cpu_ns,
                 run_wait_ns,
-            })
-        };
-        // Budget 5 ms. Woke 7 ms late, ran 0.3 ms, never waited for a CPU: the timer was late.
-        assert_eq!(
-            miss_cause_of(7_000_000, 300_000, s(300_000, 0)),
-            miss_cause::LATE_WAKEUP
-        );
-        // Woke 7 ms late, but 6.5 ms of it runnable on a run queue: the CPU was taken.
-        assert_eq!(
-            miss_cause_of(7_000_000, 300_000, s(300_000, 6_500_000)),
-            miss_cause::RUN_QUEUE
-        );
-        // On time, 6 ms of computing.
-        assert_eq!(
-            miss_cause_of(10_000, 6_000_000, s(6_000_000, 0)),
-            miss_cause::EXECUTION
-        );
-        // On time, 6 ms in the body but 1 ms of CPU: it blocked.
-        assert_eq!(
-            miss_cause_of(10_000, 6_000_000, s(1_000_000, 0)),
-            miss_cause::BLOCKED
-        );
-        // Shares: cpu 2, wait 1.5, late 3 − 1.5 = 1.5, blocked 6 − 2 − 1.5 − 1.5 = 1 → execution.
-        assert_eq!(
-            miss_cause_of(3_000_000, 3_000_000, s(2_000_000, 1_500_000)),
-            miss_cause::EXECUTION
-        );
-        // CPU time read across the cycle boundary can exceed the cycle: no underflow.
-        assert_eq!(
-            miss_cause_of(0, 1_000, s(5_000, 5_000)),
-            miss_cause::EXECUTION
-        );
-        assert_eq!(miss_cause_of(7_000_000, 0, None), miss_cause::UNKNOWN);
+            });
+            assert_eq!(
+                miss_cause_of(lateness, exec, sched),
+                want,
+                "{lateness} {exec} {cpu_ns} {run_wait_ns}"
+            );
+        }
+        assert_eq!(miss_cause_of(7 * MS, 0, None), miss_cause::UNKNOWN);
     }
 
     #[test]
