@@ -267,9 +267,11 @@ fn cyclictest(
     Ok(Some((run.wait()?, cmdline)))
 }
 
-/// A running `cyclictest -q` with a histogram (`-h`), its output going to a file.
+/// A running `cyclictest -q` with a histogram (`-h`), its output going to a file. Killed if
+/// dropped while running (an error elsewhere must not leave it behind).
 pub struct Cyclictest {
-    child: Child,
+    /// `None` once reaped.
+    child: Option<Child>,
     threads: usize,
     out_path: PathBuf,
     /// The command line.
@@ -291,24 +293,25 @@ impl Cyclictest {
             .spawn()
             .with_context(|| format!("start {cmdline}"))?;
         Ok(Self {
-            child,
+            child: Some(child),
             threads,
             out_path: out_path.to_path_buf(),
             cmdline,
         })
     }
 
+    fn child(&mut self) -> &mut Child {
+        self.child
+            .as_mut()
+            .expect("cyclictest is reaped only by finish")
+    }
+
     /// Wait for it to end (it was given `-D`), staying responsive to Ctrl-C; per-thread samples
     /// (ns, 1 µs resolution, histogram overflows recorded at that thread's max).
     pub fn wait(mut self) -> Result<Vec<Vec<u64>>> {
-        loop {
-            if self.child.try_wait()?.is_some() {
-                break;
-            }
+        while self.child().try_wait()?.is_none() {
             if crate::interrupted() {
-                let _ = self.child.kill();
-                let _ = self.child.wait();
-                bail!("interrupted");
+                bail!("interrupted"); // killed on drop
             }
             std::thread::sleep(Duration::from_millis(50));
         }
@@ -318,33 +321,41 @@ impl Cyclictest {
     /// Stop it with `SIGINT` (it then prints its histogram) and return what [`Cyclictest::wait`]
     /// does.
     pub fn stop(mut self) -> Result<Vec<Vec<u64>>> {
-        if self.child.try_wait()?.is_none() {
-            crate::payload::send_sigint(self.child.id())
-                .with_context(|| format!("stop {}", self.cmdline))?;
+        let id = self.child().id();
+        if self.child().try_wait()?.is_none() {
+            crate::payload::send_sigint(id).with_context(|| format!("stop {}", self.cmdline))?;
         }
         self.finish()
     }
 
-    fn finish(self) -> Result<Vec<Vec<u64>>> {
-        let Self {
-            child,
-            threads,
-            out_path,
-            cmdline,
-        } = self;
+    fn finish(mut self) -> Result<Vec<Vec<u64>>> {
+        let child = self
+            .child
+            .take()
+            .expect("cyclictest is reaped only by finish");
         let out = child.wait_with_output()?;
         // cyclictest exits with status 0 after SIGINT (it handles the signal).
         if !out.status.success() {
             bail!(
-                "{cmdline} failed ({}): {}",
+                "{} failed ({}): {}",
+                self.cmdline,
                 out.status,
                 String::from_utf8_lossy(&out.stderr).trim()
             );
         }
-        let text = std::fs::read_to_string(&out_path)
-            .with_context(|| format!("read {}", out_path.display()))?;
-        parse_cyclictest(&text, threads)
-            .with_context(|| format!("cannot parse the output of {cmdline}"))
+        let text = std::fs::read_to_string(&self.out_path)
+            .with_context(|| format!("read {}", self.out_path.display()))?;
+        parse_cyclictest(&text, self.threads)
+            .with_context(|| format!("cannot parse the output of {}", self.cmdline))
+    }
+}
+
+impl Drop for Cyclictest {
+    fn drop(&mut self) {
+        if let Some(mut c) = self.child.take() {
+            let _ = c.kill();
+            let _ = c.wait();
+        }
     }
 }
 

@@ -232,10 +232,23 @@ pub fn futex_wake(word: &std::sync::atomic::AtomicU32) {
 
 /// The CPUs the calling thread may run on.
 pub fn affinity() -> io::Result<Vec<usize>> {
+    thread_affinity(0)
+}
+
+/// The CPUs the process's main thread may run on: what threads get unless they are pinned.
+pub fn process_affinity() -> io::Result<Vec<usize>> {
+    // SAFETY: `getpid` takes no arguments and cannot fail.
+    thread_affinity(unsafe { libc::getpid() })
+}
+
+/// The CPUs thread `tid` of this process (0 = the calling thread) may run on.
+fn thread_affinity(tid: libc::pid_t) -> io::Result<Vec<usize>> {
     // SAFETY: an all-zero `cpu_set_t` is the empty set.
     let mut set: libc::cpu_set_t = unsafe { std::mem::zeroed() };
-    // SAFETY: `set` is a valid, writable cpu_set_t of the size passed; pid 0 = calling thread.
-    check(unsafe { libc::sched_getaffinity(0, std::mem::size_of::<libc::cpu_set_t>(), &mut set) })?;
+    // SAFETY: `set` is a valid, writable cpu_set_t of the size passed; the kernel writes it.
+    check(unsafe {
+        libc::sched_getaffinity(tid, std::mem::size_of::<libc::cpu_set_t>(), &mut set)
+    })?;
     let max = 8 * std::mem::size_of::<libc::cpu_set_t>();
     // SAFETY: every index is below the set's capacity; `set` was filled by the kernel.
     Ok((0..max)

@@ -86,8 +86,10 @@ pub enum WorkerPriority {
     Nice(i32),
 }
 
-/// Lower the calling thread's priority per `cfg`; never fails (refusals are logged once).
+/// Lower the calling thread's priority per `cfg` and let it run on the process's CPUs; never fails
+/// (refusals are logged once).
 pub fn lower_priority(cfg: &PoolConfig) -> WorkerPriority {
+    unpin();
     if cfg.priority == PoolPriority::Idle {
         match crate::os::set_idle() {
             Ok(()) => return WorkerPriority::Idle,
@@ -107,6 +109,17 @@ pub fn lower_priority(cfg: &PoolConfig) -> WorkerPriority {
         );
     }
     WorkerPriority::Nice(crate::os::nice().unwrap_or(0))
+}
+
+/// Let the calling thread run on the process's CPUs: pool threads are often created by a pinned
+/// real-time thread (the planner builds its pool on the LBV thread) and would inherit its CPU.
+fn unpin() {
+    if let Err(e) = crate::os::process_affinity().and_then(|cpus| crate::os::set_affinity(&cpus)) {
+        crate::executor::log_once(
+            "pool_affinity",
+            &format!("pool threads keep their creator's CPUs ({e})"),
+        );
+    }
 }
 
 /// Identifies a submitted job (increasing from 1 per pool).
@@ -184,8 +197,10 @@ impl Handoff {
 
 /// The dispatcher: hands queued jobs to rayon until stopped.
 fn dispatch(h: &Handoff, pool: &rayon::ThreadPool) {
-    // Created by whoever built the pool (possibly a SCHED_FIFO thread): run as a normal thread.
+    // Created by whoever built the pool (possibly a pinned SCHED_FIFO thread): run as a normal
+    // thread on the process's CPUs.
     let _ = crate::os::set_other();
+    unpin();
     loop {
         while let Some(job) = h.queue.pop() {
             pool.spawn(job);

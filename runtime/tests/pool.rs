@@ -119,3 +119,47 @@ fn jobs_may_use_rayon_parallelism_inside_the_pool() {
     assert_eq!(done.result.unwrap(), 500_500);
     assert_eq!(pool.install(rayon::current_num_threads), 2);
 }
+
+/// The calling thread's `Cpus_allowed_list` from `/proc/thread-self/status` (e.g. "0-1").
+fn cpus_allowed() -> String {
+    std::fs::read_to_string("/proc/thread-self/status")
+        .unwrap()
+        .lines()
+        .find_map(|l| l.strip_prefix("Cpus_allowed_list:"))
+        .expect("Cpus_allowed_list in /proc/thread-self/status")
+        .trim()
+        .to_string()
+}
+
+/// The planner builds its pool on the LBV thread, which is pinned to one CPU: the workers must
+/// not inherit that pin, or GBV evaluation would share one CPU with the LBV.
+#[test]
+fn workers_of_a_pool_built_on_a_pinned_thread_run_on_the_process_cpus() {
+    let process = cpus_allowed();
+    let (creator, worker) = std::thread::spawn(|| {
+        let pin = ExecutorConfig {
+            policy: runtime::executor::SchedPolicy::Other,
+            nice: 0,
+            mlockall: false,
+            cpu_dma_latency_us: -1,
+            cpus: vec![0],
+            ..ExecutorConfig::default()
+        };
+        runtime::executor::apply_sched("pinned-creator", &pin);
+        let pool = WorkerPool::<String>::new(
+            "unpin",
+            &PoolConfig {
+                threads: 1,
+                ..PoolConfig::default()
+            },
+        )
+        .unwrap();
+        pool.try_submit(cpus_allowed).unwrap();
+        let done = pool.recv_timeout(Duration::from_secs(10)).expect("job ran");
+        (cpus_allowed(), done.result.unwrap())
+    })
+    .join()
+    .unwrap();
+    assert_eq!(creator, "0");
+    assert_eq!(worker, process);
+}
