@@ -2,7 +2,8 @@
 //!
 //! frame → map = `map.header.stamp_ns − map.last_frame_stamp_ns` at the first map that includes
 //! the frame; frame → LBV = `neck_goal.header.stamp_ns − neck_goal.frame_stamp_ns` at the first
-//! neck goal computed from such a map (each frame counted once; the same difference at every
+//! neck goal computed from such a map, except a session's first (start-up; each frame counted
+//! once; the same difference at every
 //! neck goal is reported as the frame's age at the LBV); LBV execution time and misses from
 //! the `deadline` topic (events whose thread name contains "lbv", or all events if none does);
 //! GBV round time = `eval_ns` of GBV planner decisions. Every miss carries its cause from the
@@ -631,8 +632,12 @@ fn session(
             if measuring {
                 acc.neck_seen += 1;
             }
+            // The session's first goal computed from a map is start-up (the planner waited for
+            // its inputs): its frame's age says nothing about the pipeline in operation.
+            let steady = lbv_frame > 0;
             let new_frame = g.frame_stamp_ns > lbv_frame;
             lbv_frame = lbv_frame.max(g.frame_stamp_ns);
+            let measuring = measuring && steady;
             if measuring && g.frame_stamp_ns > 0 {
                 let l = g.header.stamp_ns.saturating_sub(g.frame_stamp_ns);
                 acc.lbv_age.push(l);
