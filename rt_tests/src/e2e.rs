@@ -2,9 +2,9 @@
 //!
 //! frame → map = `map.header.stamp_ns − map.last_frame_stamp_ns` at the first map that includes
 //! the frame; frame → LBV = `neck_goal.header.stamp_ns − neck_goal.frame_stamp_ns` at the first
-//! neck goal computed from such a map, except a session's first (start-up; each frame counted
-//! once; the same difference at every
-//! neck goal is reported as the frame's age at the LBV); LBV execution time and misses from
+//! neck goal computed from such a map (each frame counted once; a session's very first such goal
+//! measures start-up and is left out; the same difference at every neck goal is reported as the
+//! frame's age at the LBV); LBV execution time and misses from
 //! the `deadline` topic (events whose thread name contains "lbv", or all events if none does);
 //! GBV round time = `eval_ns` of GBV planner decisions. Every miss carries its cause from the
 //! thread's scheduler statistics (`runtime::executor::miss_cause_of`). With `probe`, cyclictest
