@@ -81,6 +81,14 @@ impl CameraMount {
     pub fn pitch(&self) -> f32 {
         self.pitch_deg.to_radians()
     }
+
+    /// The neck yaw (relative to the base) that points the camera at `target` from base pose
+    /// `base`.
+    pub fn neck_yaw_toward(&self, base: [f32; 3], target: Vec3) -> f32 {
+        let cam = self.camera_pose(base, 0.0, self.pitch());
+        let d = target - Vec3::from(cam.translation);
+        wrap_angle(d.y.atan2(d.x) - base[2])
+    }
 }
 
 /// Pinhole camera with image size and valid depth range.

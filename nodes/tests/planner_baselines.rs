@@ -7,7 +7,6 @@ use glam::Vec3;
 use nodes::config::CameraConfig;
 use nodes::eval::{MatchParams, RunInfo, SessionLog};
 use nodes::planner::clusters::{cluster_info, unfinished_centroid};
-use nodes::planner::coverage::aim_neck;
 use nodes::planner::synth::add_object;
 use nodes::planner::{
     EvalParams, PlannerConfig, PlannerInputs, PlannerKind, Step, Target, ViewPlanner, Weights,
@@ -169,7 +168,7 @@ fn coverage_waypoints_carry_the_h_iou_of_their_view() {
         let (g, d) = goal_and_decision(planner.as_mut(), &map, &state, &boxed_zeroed());
         let c = chosen(&d);
         // The camera is on the cluster centre at every waypoint.
-        let neck = aim_neck(&p.mount, g.pose, info.center);
+        let neck = p.mount.neck_yaw_toward(g.pose, info.center);
         let pose = p.mount.camera_pose(g.pose, neck, p.mount.pitch());
         let expect = evaluate_view(&map, &pose, Some(&target), gbv_weights(&cfg), &p);
         assert!(c.h_iou.is_finite(), "{c:?}");

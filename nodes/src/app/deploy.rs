@@ -50,7 +50,7 @@ pub struct RunArgs {
     /// Configuration file given on the command line (children load the same one).
     pub config_file: Option<PathBuf>,
     /// Deadline testing: keep the GBV pool saturated with this many extra candidate views
-    /// (see [`GbvLoad`]); 0 = off.
+    /// (see `GbvLoad` in this module); 0 = off.
     pub gbv_load: usize,
 }
 

@@ -21,7 +21,7 @@ use crate::config::CameraConfig;
 use crate::geom::CameraMount;
 use crate::planner::clusters::{self, ClusterInfo};
 use crate::planner::config::{PlannerConfig, PlannerKind};
-use crate::planner::coverage::{CoverageJob, CoverageParams, aim_neck};
+use crate::planner::coverage::{CoverageJob, CoverageParams};
 use crate::planner::evaluate::{EvalParams, Scoring, Weights};
 use crate::planner::reach::NavParams;
 use crate::planner::session::{
@@ -198,7 +198,7 @@ impl ViewPlanner for CoveragePlanner {
             .map(|c| c.center)
         });
         goal.yaw = match centre {
-            Some(c) => aim_neck(&self.mount, state.base_pose, c),
+            Some(c) => self.mount.neck_yaw_toward(state.base_pose, c),
             None => self.look.target(state.neck_yaw),
         };
         goal

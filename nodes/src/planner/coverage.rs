@@ -5,14 +5,12 @@
 //! going counter-clockwise, plus the start again to close the circle; the base yaw is the
 //! direction of travel (tangent). Waypoints in collision or unreachable from the robot are
 //! skipped; a cluster without any reachable waypoint is skipped as a whole. Each waypoint's view
-//! (camera aimed at the cluster centre, [`aim_neck`]) is evaluated with VP-SOM's terms on the
+//! (camera aimed at the cluster centre, [`crate::geom::CameraMount::neck_yaw_toward`]) is evaluated with VP-SOM's terms on the
 //! round's map, for the trace and the per-NBV metrics.
 
-use crate::geom::{CameraMount, wrap_angle};
 use crate::planner::clusters::{ClusterInfo, unfinished_centroid};
 use crate::planner::evaluate::{Scoring, Target};
 use crate::planner::reach::NavParams;
-use glam::Vec3;
 use shm_types::{Candidate, OccupancyGrid};
 use std::f32::consts::{FRAC_PI_2, TAU};
 
@@ -39,13 +37,6 @@ pub fn circle(info: &ClusterInfo, p: &CoverageParams, from: [f32; 2]) -> Vec<[f3
             [info.center.x + r * c, info.center.y + r * s, yaw]
         })
         .collect()
-}
-
-/// The neck yaw (relative to the base) that points the camera at `centre` from base pose `base`.
-pub fn aim_neck(mount: &CameraMount, base: [f32; 3], centre: Vec3) -> f32 {
-    let cam = mount.camera_pose(base, 0.0, mount.pitch());
-    let d = centre - Vec3::from(cam.translation);
-    wrap_angle(d.y.atan2(d.x) - base[2])
 }
 
 /// Plan the circle of the first cluster (in order) with a reachable waypoint, as an owned job.
@@ -112,7 +103,7 @@ impl CoverageJob {
             let mount = sc.params.mount;
             let views = wps
                 .iter()
-                .map(|w| sc.chosen(*w, aim_neck(&mount, *w, info.center), Some(&target)))
+                .map(|w| sc.chosen(*w, mount.neck_yaw_toward(*w, info.center), Some(&target)))
                 .collect();
             found = Some(Circle {
                 cluster: *info,

@@ -564,7 +564,8 @@ pub(crate) enum Back {
     Coverage(CoverageResult),
 }
 
-/// The trace of a chassis goal whose one evaluated candidate is the chosen view (baselines).
+/// The trace of a chassis goal whose one evaluated candidate is its chosen view (baselines;
+/// `c` comes from [`Scoring::chosen`], flagged chosen).
 pub(crate) fn chosen_decision(c: Candidate, cluster_id: i32, map_seq: u64) -> Box<PlannerDecision> {
     let mut d = boxed_zeroed::<PlannerDecision>();
     d.kind = decision_kind::GBV;
@@ -572,7 +573,7 @@ pub(crate) fn chosen_decision(c: Candidate, cluster_id: i32, map_seq: u64) -> Bo
     d.cluster_id = cluster_id;
     d.count = 1;
     d.evaluated = 1;
-    d.candidates[0] = Candidate { chosen: 1, ..c };
+    d.candidates[0] = c;
     d
 }
 

@@ -24,7 +24,6 @@ use crate::config::CameraConfig;
 use crate::geom::CameraMount;
 use crate::planner::clusters::{self, ClusterInfo};
 use crate::planner::config::{PlannerConfig, PlannerKind};
-use crate::planner::coverage::aim_neck;
 use crate::planner::evaluate::{EvalParams, Target};
 use crate::planner::gbv::{GbvJob, GbvParams};
 use crate::planner::lbv::Lbv;
@@ -230,7 +229,7 @@ impl ViewPlanner for VpsomPlanner {
                     .tracked
                     .and_then(|id| clusters::cluster_info(map, id, self.cfg.eps_sopm));
                 goal.yaw = match held {
-                    Some(c) => aim_neck(&self.mount, state.base_pose, c.center),
+                    Some(c) => self.mount.neck_yaw_toward(state.base_pose, c.center),
                     None => self.look.target(state.neck_yaw),
                 };
             }
