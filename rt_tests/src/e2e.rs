@@ -54,9 +54,12 @@ impl Drop for Pipeline {
 fn publisher<T: shm_types::Message>(
     ctx: &PortContext,
     name: &str,
-) -> Result<runtime::ports::Publisher<T>, runtime::ports::PortError> {
+) -> Result<runtime::ports::Publisher<T>, runtime::ports::PublisherError> {
+    use runtime::ports::{PublisherError, ServiceError};
     match ctx.publisher::<T>(name) {
-        Err(runtime::ports::PortError::Name { .. }) => ctx.publisher::<T>(&name.replace('/', "_")),
+        Err(PublisherError::Service(
+            ServiceError::Topic { .. } | ServiceError::ServiceName { .. },
+        )) => ctx.publisher::<T>(&name.replace('/', "_")),
         r => r,
     }
 }
@@ -65,10 +68,11 @@ fn subscriber<T: shm_types::Message>(
     ctx: &PortContext,
     name: &str,
 ) -> Result<runtime::ports::Subscriber<T>> {
+    use runtime::ports::{ServiceError, SubscriberError};
     match ctx.subscriber::<T>(name) {
-        Err(runtime::ports::PortError::Name { .. }) => {
-            Ok(ctx.subscriber::<T>(&name.replace('/', "_"))?)
-        }
+        Err(SubscriberError::Service(
+            ServiceError::Topic { .. } | ServiceError::ServiceName { .. },
+        )) => Ok(ctx.subscriber::<T>(&name.replace('/', "_"))?),
         r => Ok(r?),
     }
 }

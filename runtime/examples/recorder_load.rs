@@ -4,10 +4,11 @@
 //! 0.5 Hz, deadline events at 20 Hz, neck goals at 20 Hz, a latency summary and a log line at 1 Hz.
 //!
 //! ```text
-//! cargo run --release -p runtime --example recorder_load -- [SECONDS] [OUT.mcap]
+//! cargo run --release -p runtime --example recorder_load -- [--seconds S] [--out OUT.mcap]
 //! ```
-//! Prints the writer thread's CPU time as a share of one core, the producer-side cost per call,
-//! drops, and the file rate.
+//! Records for `S` seconds (default 10) into `OUT.mcap` (default `vpsom-recorder-load.mcap` in
+//! the temporary directory). Prints the writer thread's CPU time as a share of one core, the
+//! producer-side cost per call, drops, and the file rate.
 
 use runtime::recorder::{
     LatencySummary, LogLevel, NodeLatency, Recorder, RecorderConfig, RecorderSetup,
@@ -23,17 +24,38 @@ fn header(seq: u64, t: Duration) -> Header {
     }
 }
 
-fn main() {
+/// `--seconds S` (default 10) and `--out PATH` from the command line.
+fn args() -> Result<(f64, String), String> {
+    let mut secs = 10.0;
+    let mut out = std::env::temp_dir()
+        .join("vpsom-recorder-load.mcap")
+        .display()
+        .to_string();
     let mut args = std::env::args().skip(1);
-    let secs: f64 = args.next().and_then(|s| s.parse().ok()).unwrap_or(10.0);
-    let out = args.next().unwrap_or_else(|| {
-        std::env::temp_dir()
-            .join("vpsom-recorder-load.mcap")
-            .display()
-            .to_string()
-    });
+    while let Some(a) = args.next() {
+        match a.as_str() {
+            "--seconds" => {
+                secs = args
+                    .next()
+                    .and_then(|s| s.parse::<f64>().ok())
+                    .filter(|s| s.is_finite() && *s > 0.0)
+                    .ok_or("--seconds needs a number > 0")?;
+            }
+            "--out" => out = args.next().ok_or("--out needs a path")?,
+            "-h" | "--help" => {
+                println!("usage: recorder_load [--seconds S] [--out OUT.mcap]");
+                std::process::exit(0);
+            }
+            other => return Err(format!("unknown argument {other:?} (try --help)")),
+        }
+    }
+    Ok((secs, out))
+}
+
+fn main() -> Result<(), Box<dyn std::error::Error>> {
+    let (secs, out) = args()?;
     let cfg = RecorderConfig::default();
-    let rec = Recorder::create(out.as_ref(), &cfg, RecorderSetup::default()).expect("create");
+    let rec = Recorder::create(out.as_ref(), &cfg, RecorderSetup::default())?;
     let h = rec.handle();
 
     // Inputs shaped like the real ones: smooth depth with noise, a full map, full decisions.
@@ -130,7 +152,7 @@ fn main() {
         }
         if ms >= next_sec {
             next_sec = ms + 1000;
-            let mut hist = hdrhistogram::Histogram::<u64>::new(3).expect("histogram");
+            let mut hist = hdrhistogram::Histogram::<u64>::new(3)?;
             let _ = hist.record(2_000_000);
             h.record_latency(LatencySummary {
                 time_ns: t.as_nanos() as u64,
@@ -142,7 +164,7 @@ fn main() {
         std::thread::sleep(tick);
     }
     let wall = start.elapsed().as_secs_f64();
-    let s = rec.finish().expect("finish");
+    let s = rec.finish()?;
     let size = std::fs::metadata(&out).map(|m| m.len()).unwrap_or(0);
     let us = |i: usize| producer[i].as_secs_f64() * 1e6 / calls[i].max(1) as f64;
     println!("recorded {wall:.1} s into {out}");
@@ -164,4 +186,5 @@ fn main() {
         size as f64 / 1e6 / wall,
         s.written.values().sum::<u64>()
     );
+    Ok(())
 }

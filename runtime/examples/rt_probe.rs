@@ -2,19 +2,43 @@
 //! 1. periodic-executor wake-up lateness at 1 kHz with and without the spin margin;
 //! 2. in-process zero-copy `DepthFrame` loan → fill header → send → receive latency.
 //!
-//! `cargo run -p runtime --release --example rt_probe [cycles]`
-//! (the jitter harness in `rt_tests` is the reference; this is a smoke-level probe).
+//! ```text
+//! cargo run --release -p runtime --example rt_probe -- [--seconds S]
+//! ```
+//! Each executor run lasts `S` seconds (default 2; `S × 1000` cycles), the port probe at most
+//! 2000 round trips. The jitter harness in `rt_tests` is the reference; this is a smoke-level
+//! probe.
 
 use runtime::executor::{Control, Cycle, Executor, ExecutorConfig};
 use runtime::ports::{PortContext, PortsConfig, Stamp};
 use shm_types::DepthFrame;
 use std::time::{Duration, Instant};
 
+/// `--seconds S` (default 2) from the command line.
+fn seconds() -> Result<f64, String> {
+    let mut secs = 2.0;
+    let mut args = std::env::args().skip(1);
+    while let Some(a) = args.next() {
+        match a.as_str() {
+            "--seconds" => {
+                secs = args
+                    .next()
+                    .and_then(|s| s.parse::<f64>().ok())
+                    .filter(|s| s.is_finite() && *s > 0.0)
+                    .ok_or("--seconds needs a number > 0")?;
+            }
+            "-h" | "--help" => {
+                println!("usage: rt_probe [--seconds S]   (each executor run: S s at 1 kHz)");
+                std::process::exit(0);
+            }
+            other => return Err(format!("unknown argument {other:?} (try --help)")),
+        }
+    }
+    Ok(secs)
+}
+
 fn main() -> Result<(), Box<dyn std::error::Error>> {
-    let cycles: u64 = std::env::args()
-        .nth(1)
-        .and_then(|s| s.parse().ok())
-        .unwrap_or(2000);
+    let cycles = ((seconds()? * 1000.0).round() as u64).max(1);
     for margin_us in [0u64, 200] {
         let cfg = ExecutorConfig {
             spin_margin_us: margin_us,

@@ -133,14 +133,27 @@ pub fn load_toml<T: DeserializeOwned>(file: &Path) -> Result<T, ConfigError> {
     parse_toml(file, &text)
 }
 
-/// Deserialise TOML text that came from `file` (used for tests and embedded defaults).
+/// Deserialise TOML text that came from `file` (used for tests and embedded defaults). The key
+/// path of an error comes from serde itself (`serde_path_to_error`); a syntax error, found before
+/// any key is deserialised, is at `<root>`.
 pub fn parse_toml<T: DeserializeOwned>(file: &Path, text: &str) -> Result<T, ConfigError> {
-    toml::from_str(text).map_err(|e| ConfigError::Parse {
+    let parse_error = |key: String, e: toml::de::Error| ConfigError::Parse {
         file: file.to_path_buf(),
-        key: key_at(text, e.span()),
+        key,
         message: location(text, e.span()) + e.message(),
+    };
+    let de = toml::Deserializer::parse(text).map_err(|e| parse_error(ROOT_KEY.into(), e))?;
+    serde_path_to_error::deserialize(de).map_err(|e| {
+        let key = match e.path().to_string() {
+            p if p == "." => ROOT_KEY.into(), // the empty path
+            p => p,
+        };
+        parse_error(key, e.into_inner())
     })
 }
+
+/// The key of an error that no key path is known for.
+const ROOT_KEY: &str = "<root>";
 
 /// "line N: " for a parser span.
 fn location(text: &str, span: Option<std::ops::Range<usize>>) -> String {
@@ -150,34 +163,6 @@ fn location(text: &str, span: Option<std::ops::Range<usize>>) -> String {
             text[..s.start.min(text.len())].matches('\n').count() + 1
         ),
         None => String::new(),
-    }
-}
-
-/// Best-effort dotted key at a parser span: the enclosing `[table]` plus the key on that line.
-fn key_at(text: &str, span: Option<std::ops::Range<usize>>) -> String {
-    let Some(span) = span else {
-        return "<root>".into();
-    };
-    let start = span.start.min(text.len());
-    let mut table = String::new();
-    for line in text[..start].lines() {
-        let t = line.trim();
-        if t.starts_with('[') {
-            table = t.trim_matches(|c| c == '[' || c == ']').trim().to_string();
-        }
-    }
-    let line_start = text[..start].rfind('\n').map_or(0, |i| i + 1);
-    let line = text[line_start..].lines().next().unwrap_or("").trim();
-    let key = if line.starts_with('[') {
-        String::new()
-    } else {
-        line.split('=').next().unwrap_or("").trim().to_string()
-    };
-    match (table.is_empty(), key.is_empty()) {
-        (true, true) => "<root>".into(),
-        (true, false) => key,
-        (false, true) => table,
-        (false, false) => format!("{table}.{key}"),
     }
 }
 
@@ -224,6 +209,33 @@ mod tests {
         assert_eq!(e.key(), "rate.hz");
         assert!(
             e.to_string().contains("fast") || e.to_string().contains("string"),
+            "{e}"
+        );
+    }
+
+    #[test]
+    fn syntax_error_is_at_the_root_with_its_line() {
+        let e = parse("[rate]\nhz = = 3\n").unwrap_err();
+        assert_eq!(e.key(), "<root>", "{e}");
+        assert!(
+            e.to_string().starts_with("test.toml: <root>: line 2"),
+            "{e}"
+        );
+    }
+
+    #[test]
+    fn array_elements_are_named_by_index() {
+        #[derive(Debug, Deserialize)]
+        #[serde(deny_unknown_fields)]
+        #[allow(dead_code)] // fields exist to be parsed, not read
+        struct Lists {
+            groups: Vec<Vec<u32>>,
+        }
+        let e = parse_toml::<Lists>(Path::new("l.toml"), "groups = [[1, 2], [3, \"x\"]]\n")
+            .unwrap_err();
+        assert_eq!(e.key(), "groups[1][1]", "{e}");
+        assert!(
+            e.to_string().starts_with("l.toml: groups[1][1]: line 1"),
             "{e}"
         );
     }

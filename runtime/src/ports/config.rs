@@ -1,0 +1,178 @@
+//! `[ports]` configuration: [`PortsConfig`] (defaults for every topic plus per-topic
+//! [`TopicOverride`]s), the resolved [`TopicSettings`] of one topic, [`Overflow`], and the name
+//! checks for namespaces and topics.
+
+use crate::config::{Checker, ConfigError};
+use serde::Deserialize;
+use std::collections::BTreeMap;
+
+/// What a publisher does when a subscriber's buffer is full.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Deserialize)]
+#[serde(rename_all = "snake_case")]
+pub enum Overflow {
+    /// Latest wins: the oldest unread sample in the subscriber's buffer is replaced; the
+    /// publisher never blocks (real-time producers, sensor streams).
+    Overwrite,
+    /// Backpressure: the publisher retries until the subscriber has room (or `block_timeout_ms`
+    /// passes, then `send` fails); nothing is lost (recording, tests). A subscriber attaches its
+    /// end of the connection on its first `receive`/`wait`; until then a full buffer drops
+    /// (iceoryx2 refuses to block on a receiver that is not attached).
+    Block,
+    /// The new sample is not delivered to a full subscriber; the publisher never blocks.
+    Discard,
+}
+
+/// Declares every per-topic service setting once, as `field: type = built-in default`, and
+/// derives from that list [`TopicSettings`] (resolved values), [`TopicOverride`] (the same keys,
+/// each optional), [`PortsConfig`] (`namespace`, the same keys as every topic's defaults, and
+/// `topics`), `PortsConfig::default()` and the merge `PortsConfig::settings_with`.
+macro_rules! topic_settings {
+    ($( $(#[doc = $doc:literal])+ $field:ident: $ty:ty = $default:expr, )+) => {
+        /// Settings of one topic's services (the `[ports]` defaults merged with a per-topic
+        /// override).
+        #[derive(Debug, Clone, Copy, PartialEq, Eq)]
+        pub struct TopicSettings {
+            $( $(#[doc = $doc])+ pub $field: $ty, )+
+        }
+
+        /// A per-topic override in `[ports.topics.<topic>]`; every key is optional.
+        #[derive(Debug, Clone, Default, PartialEq, Eq, Deserialize)]
+        #[serde(deny_unknown_fields, default)]
+        pub struct TopicOverride {
+            $(
+                #[doc = concat!("See [`TopicSettings::", stringify!($field), "`].")]
+                pub $field: Option<$ty>,
+            )+
+        }
+
+        /// `[ports]` section: iceoryx2 service settings shared by every topic, plus per-topic
+        /// overrides.
+        #[derive(Debug, Clone, PartialEq, Eq, Deserialize)]
+        #[serde(deny_unknown_fields, default)]
+        pub struct PortsConfig {
+            /// Middle part of every service name, `vpsom/<namespace>/<topic>`: runs with
+            /// different namespaces never collide. `[A-Za-z0-9_-]`, 1..=48 characters.
+            pub namespace: String,
+            $(
+                #[doc = concat!("See [`TopicSettings::", stringify!($field), "`].")]
+                pub $field: $ty,
+            )+
+            /// Per-topic overrides, keyed by topic name.
+            pub topics: BTreeMap<String, TopicOverride>,
+        }
+
+        impl Default for PortsConfig {
+            fn default() -> Self {
+                Self {
+                    namespace: "main".into(),
+                    $( $field: $default, )+
+                    topics: BTreeMap::new(),
+                }
+            }
+        }
+
+        impl PortsConfig {
+            /// The defaults merged with `o`.
+            fn settings_with(&self, o: &TopicOverride) -> TopicSettings {
+                TopicSettings {
+                    $( $field: o.$field.unwrap_or(self.$field), )+
+                }
+            }
+        }
+    };
+}
+
+topic_settings! {
+    /// Samples a late-joining subscriber receives on connection.
+    history_size: usize = 0,
+    /// Unread samples a subscriber can buffer.
+    subscriber_buffer: usize = 2,
+    /// Samples a subscriber can hold borrowed at once.
+    subscriber_max_borrowed: usize = 2,
+    /// Samples a publisher can hold loaned at once.
+    publisher_max_loaned: usize = 2,
+    /// Publishers per topic.
+    max_publishers: usize = 2,
+    /// Subscribers per topic.
+    max_subscribers: usize = 8,
+    /// Nodes (processes) that may open the topic.
+    max_nodes: usize = 16,
+    /// Full-buffer behaviour.
+    overflow: Overflow = Overflow::Overwrite,
+    /// With [`Overflow::Block`]: give up after this long (ms).
+    block_timeout_ms: u64 = 1000,
+}
+
+impl PortsConfig {
+    /// Range-check.
+    pub fn validate(&self, c: &Checker) -> Result<(), ConfigError> {
+        check_namespace(&self.namespace)
+            .map_err(|why| c.range("ports.namespace", &self.namespace, why))?;
+        self.check_settings(c, "ports", &self.settings_with(&TopicOverride::default()))?;
+        for (topic, o) in &self.topics {
+            check_topic(topic).map_err(|why| c.range("ports.topics", topic, why))?;
+            self.check_settings(c, &format!("ports.topics.{topic}"), &self.settings_with(o))?;
+        }
+        Ok(())
+    }
+
+    fn check_settings(&self, c: &Checker, at: &str, s: &TopicSettings) -> Result<(), ConfigError> {
+        c.count(&format!("{at}.history_size"), s.history_size, 0, 64)?;
+        c.count(
+            &format!("{at}.subscriber_buffer"),
+            s.subscriber_buffer,
+            1,
+            256,
+        )?;
+        c.count(
+            &format!("{at}.subscriber_max_borrowed"),
+            s.subscriber_max_borrowed,
+            1,
+            64,
+        )?;
+        c.count(
+            &format!("{at}.publisher_max_loaned"),
+            s.publisher_max_loaned,
+            1,
+            64,
+        )?;
+        c.count(&format!("{at}.max_publishers"), s.max_publishers, 1, 64)?;
+        c.count(&format!("{at}.max_subscribers"), s.max_subscribers, 1, 64)?;
+        c.count(&format!("{at}.max_nodes"), s.max_nodes, 2, 256)?;
+        c.require(
+            s.block_timeout_ms >= 1 && s.block_timeout_ms <= 600_000,
+            &format!("{at}.block_timeout_ms"),
+            s.block_timeout_ms,
+            "must be in [1, 600000]",
+        )
+    }
+
+    /// The settings for `topic`: the defaults merged with `[ports.topics.<topic>]` if present.
+    pub fn topic(&self, topic: &str) -> TopicSettings {
+        match self.topics.get(topic) {
+            Some(o) => self.settings_with(o),
+            None => self.settings_with(&TopicOverride::default()),
+        }
+    }
+}
+
+/// `Ok` if `s` is usable as one segment of a service name.
+pub(super) fn check_namespace(s: &str) -> Result<(), &'static str> {
+    let ok_chars = s
+        .chars()
+        .all(|ch| ch.is_ascii_alphanumeric() || ch == '_' || ch == '-');
+    if s.is_empty() || s.len() > 48 || !ok_chars {
+        Err("must be 1..=48 characters of [A-Za-z0-9_-]")
+    } else {
+        Ok(())
+    }
+}
+
+/// A topic name: like a namespace, plus `/` between non-empty parts (e.g. `robot/state`).
+pub(super) fn check_topic(s: &str) -> Result<(), &'static str> {
+    if s.len() <= 96 && s.split('/').all(|part| check_namespace(part).is_ok()) {
+        Ok(())
+    } else {
+        Err("must be 1..=96 characters of [A-Za-z0-9_-] parts joined by '/'")
+    }
+}
