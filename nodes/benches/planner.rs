@@ -30,7 +30,7 @@ use nodes::planner::reach::NavParams;
 use nodes::planner::synth::scene3_map;
 use nodes::planner::{EvalParams, Lbv, PlannerConfig, Target, Weights};
 use runtime::executor::ThreadSchedStat;
-use shm_types::{OccupancyGrid, boxed_zeroed, grid_cell};
+use shm_types::{ObjectMap, OccupancyGrid, boxed_zeroed, grid_cell};
 use std::hint::black_box;
 use std::time::Instant;
 
@@ -144,8 +144,8 @@ fn bench_gbv(c: &mut Criterion) {
     c.bench_function("gbv_job_36_candidates_256x256_grid_2_threads", |b| {
         b.iter_batched(
             || {
-                let mut m = boxed_zeroed();
-                nodes::planner::session::copy_map(&mut m, &map);
+                let mut m = boxed_zeroed::<ObjectMap>();
+                m.copy_from(&map);
                 let mut g = boxed_zeroed();
                 nodes::planner::session::copy_grid(&mut g, &nav);
                 GbvJob {

@@ -478,6 +478,19 @@ impl ObjectMap {
     pub fn objects(&self) -> &[MapObject] {
         &self.objects[..(self.count as usize).min(MAX_OBJECTS)]
     }
+
+    /// Make `self` a copy of `src` (e.g. into a reusable buffer): the header fields and the used
+    /// objects. `count` becomes the number of objects copied (`src.count` clamped to
+    /// [`MAX_OBJECTS`]); entries past it are left as they were.
+    pub fn copy_from(&mut self, src: &ObjectMap) {
+        let objects = src.objects();
+        self.header = src.header;
+        self.last_frame_seq = src.last_frame_seq;
+        self.last_frame_stamp_ns = src.last_frame_stamp_ns;
+        self.eps_sopm = src.eps_sopm;
+        self.count = objects.len() as u32;
+        self.objects[..objects.len()].copy_from_slice(objects);
+    }
 }
 
 impl Validate for ObjectMap {
@@ -1049,6 +1062,38 @@ mod tests {
         m.objects[1].sopm_rows = 18;
         m.count = 129;
         assert_eq!(m.validate().unwrap_err().field, "count");
+    }
+
+    #[test]
+    fn object_map_copy_takes_the_used_part_and_clamps_the_count() {
+        let mut src = boxed_zeroed::<ObjectMap>();
+        src.header.seq = 9;
+        src.last_frame_seq = 4;
+        src.last_frame_stamp_ns = 77;
+        src.eps_sopm = 0.3;
+        src.count = 2;
+        src.objects[1].h_sopm = 0.7;
+        src.objects[2].h_sopm = 0.9;
+        let mut dst = boxed_zeroed::<ObjectMap>();
+        dst.count = 5;
+        dst.objects[3].h_sopm = 0.5;
+        dst.copy_from(&src);
+        assert_eq!(dst.header.seq, 9);
+        assert_eq!((dst.last_frame_seq, dst.last_frame_stamp_ns), (4, 77));
+        assert_eq!(dst.eps_sopm, 0.3);
+        assert_eq!(dst.count, 2);
+        assert_eq!(dst.objects[1].h_sopm, 0.7);
+        // Only the used objects are copied: the rest of `dst` is untouched.
+        assert_eq!(dst.objects[2].h_sopm, 0.0);
+        assert_eq!(dst.objects[3].h_sopm, 0.5);
+
+        // A count past the capacity copies (and counts) at most MAX_OBJECTS objects.
+        src.count = MAX_OBJECTS as u32 + 7;
+        src.objects[MAX_OBJECTS - 1].h_sopm = 0.25;
+        dst.copy_from(&src);
+        assert_eq!(dst.count as usize, MAX_OBJECTS);
+        assert_eq!(dst.objects[MAX_OBJECTS - 1].h_sopm, 0.25);
+        assert_eq!(dst.objects().len(), MAX_OBJECTS);
     }
 
     #[test]

@@ -17,6 +17,35 @@ use shm_types::{
 };
 use std::path::{Path, PathBuf};
 
+/// Why a lockstep session could not run or be written.
+#[derive(Debug, thiserror::Error)]
+pub enum SessionError {
+    /// The simulator could not be built.
+    #[error(transparent)]
+    Sim(#[from] crate::sim::SimError),
+    /// A configuration section was refused (e.g. the mapper's).
+    #[error(transparent)]
+    Config(#[from] runtime::config::ConfigError),
+    /// The mapper refused a frame.
+    #[error(transparent)]
+    Mapper(#[from] crate::mapper::MapperError),
+    /// The recorder failed.
+    #[error(transparent)]
+    Recorder(#[from] runtime::recorder::RecorderError),
+    /// The metrics could not be serialized for the recorder.
+    #[error(transparent)]
+    Json(#[from] serde_json::Error),
+    /// The outputs could not be written.
+    #[error(transparent)]
+    Eval(#[from] crate::eval::EvalError),
+    /// Unknown planner in a label.
+    #[error(transparent)]
+    Planner(#[from] planner::UnknownPlanner),
+    /// Unknown F(v) term in an ablation label.
+    #[error(transparent)]
+    Term(#[from] planner::UnknownTerm),
+}
+
 /// What to run.
 #[derive(Debug, Clone)]
 pub struct SessionSpec {
@@ -115,7 +144,7 @@ pub fn room(scene: &Scene) -> eval::Room {
 pub fn run_session(
     spec: &SessionSpec,
     mut progress: impl FnMut(&Progress),
-) -> anyhow::Result<SessionResult> {
+) -> Result<SessionResult, SessionError> {
     let cfg = &spec.config;
     let mut sim = Sim::new(spec.scene.clone(), cfg, spec.seed)?;
     let camera = cfg.camera.camera();
@@ -289,7 +318,11 @@ fn progress_of(t: u64, map: &ObjectMap, planner: &dyn ViewPlanner) -> Progress {
 }
 
 /// Write `metrics.json`, `map.json`, `plot.json` and `map.png` of a session into `dir`.
-pub fn write_outputs(spec: &SessionSpec, r: &SessionResult, dir: &Path) -> anyhow::Result<()> {
+pub fn write_outputs(
+    spec: &SessionSpec,
+    r: &SessionResult,
+    dir: &Path,
+) -> Result<(), SessionError> {
     let run = RunInfo {
         scene: spec.scene.name.clone(),
         planner: spec.label.clone(),
@@ -305,7 +338,7 @@ pub fn write_outputs(spec: &SessionSpec, r: &SessionResult, dir: &Path) -> anyho
 
 /// The configuration of a planner label: `vpsom`, `coverage`, `frontier`, or `vpsom-no-<term>`
 /// (an ablation of one F(v) term).
-pub fn config_for(base: &Config, label: &str) -> anyhow::Result<Config> {
+pub fn config_for(base: &Config, label: &str) -> Result<Config, SessionError> {
     let mut cfg = base.clone();
     let (kind, ablate) = match label.split_once("-no-") {
         Some((k, term)) => (k, Some(term)),

@@ -22,17 +22,6 @@ pub(super) fn copy_depth(src: &DepthFrame, dst: &mut DepthFrame) {
 }
 
 /// Copy the used part of `src` into `dst`.
-pub(super) fn copy_map(src: &ObjectMap, dst: &mut ObjectMap) {
-    dst.header = src.header;
-    dst.last_frame_seq = src.last_frame_seq;
-    dst.last_frame_stamp_ns = src.last_frame_stamp_ns;
-    dst.eps_sopm = src.eps_sopm;
-    let objs = src.objects();
-    dst.count = objs.len() as u32;
-    dst.objects[..objs.len()].copy_from_slice(objs);
-}
-
-/// Copy the used part of `src` into `dst`.
 pub(super) fn copy_decision(src: &PlannerDecision, dst: &mut PlannerDecision) {
     dst.header = src.header;
     dst.map_seq = src.map_seq;

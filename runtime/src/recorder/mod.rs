@@ -593,7 +593,7 @@ impl RecorderHandle {
     pub fn record_map(&self, map: &ObjectMap) {
         match self.shared.map_pool.take() {
             Some(mut b) => {
-                convert::copy_map(map, &mut b);
+                b.copy_from(map);
                 self.push(Kind::Map, Msg::Map(b));
             }
             None => {

@@ -1,0 +1,231 @@
+//! The launcher: `vpsom run` starts the node processes (`vpsom node <role>`), watches them,
+//! shows a status line and scores the session from what it hears on the topics.
+
+use super::host;
+use crate::app::{lockstep, topics};
+use crate::config::Config;
+use crate::eval::{self, MatchParams, RunInfo, SessionLog};
+use crate::sim::Scene;
+use anyhow::Context;
+use runtime::launcher::{ChildEvent, ChildSpec, Launcher};
+use runtime::ports::PortContext;
+use shm_types::{
+    DeadlineEvent, NavGoal, ObjectMap, PlannerDecision, RobotState, boxed_zeroed, decision_kind,
+    planner_state,
+};
+use std::io::Write;
+use std::path::{Path, PathBuf};
+use std::sync::atomic::Ordering;
+use std::time::{Duration, Instant};
+
+/// Settings shared by the launcher and every node process of one run.
+#[derive(Debug, Clone)]
+pub struct RunArgs {
+    /// Scene: built-in name or file.
+    pub scene: String,
+    /// Planner label (`vpsom`, `coverage`, `frontier`, `vpsom-no-<term>`).
+    pub planner: String,
+    /// Seed.
+    pub seed: u64,
+    /// Simulated seconds per wall second.
+    pub time_scale: f64,
+    /// Service namespace of the run.
+    pub namespace: String,
+    /// Output directory.
+    pub out: PathBuf,
+    /// Configuration file given on the command line (children load the same one).
+    pub config_file: Option<PathBuf>,
+    /// Deadline testing: keep the GBV pool saturated with this many extra candidate views
+    /// (the planner host's GBV load, see [`planner_node`](super::planner_node)); 0 = off.
+    pub gbv_load: usize,
+}
+
+impl RunArgs {
+    fn child_args(&self, role: &str) -> Vec<String> {
+        let mut a = vec![
+            "node".into(),
+            role.into(),
+            "--scene".into(),
+            self.scene.clone(),
+            "--planner".into(),
+            self.planner.clone(),
+            "--seed".into(),
+            self.seed.to_string(),
+            "--time-scale".into(),
+            self.time_scale.to_string(),
+            "--ns".into(),
+            self.namespace.clone(),
+            "--out".into(),
+            self.out.display().to_string(),
+            "--gbv-load".into(),
+            self.gbv_load.to_string(),
+        ];
+        if let Some(c) = &self.config_file {
+            a.push("--config".into());
+            a.push(c.display().to_string());
+        }
+        a
+    }
+}
+
+/// The configuration a run uses: the file's, with `[run]`'s camera size and the planner label.
+pub fn run_config(base: &Config, planner: &str) -> Result<Config, lockstep::SessionError> {
+    let cfg = base.with_camera(base.run.camera_width, base.run.camera_height, 0.0);
+    lockstep::config_for(&cfg, planner)
+}
+
+/// What a run produced.
+#[derive(Debug)]
+pub struct RunOutcome {
+    /// The metrics written to `metrics.json`.
+    pub metrics: eval::Metrics,
+    /// Why the run ended.
+    pub reason: String,
+    /// Whether a node failed for good.
+    pub failed: bool,
+}
+
+/// `vpsom run`: launch the node processes, watch them, show a status line, score the session.
+pub fn run(args: &RunArgs, cfg: &Config, exe: &Path) -> anyhow::Result<RunOutcome> {
+    let stop = host::stop_on_signals()?;
+    let scene = Scene::builtin_or_load(&args.scene)?;
+    std::fs::create_dir_all(&args.out)
+        .with_context(|| format!("creating output directory {}", args.out.display()))?;
+    let mut launcher = Launcher::new(
+        &format!("launcher-{}", args.namespace),
+        &runtime::ports::iceoryx2_config(),
+    )?;
+    if launcher.stale_nodes_removed_at_start() > 0 {
+        eprintln!(
+            "removed stale shared-memory resources of {} dead node(s) from earlier runs",
+            launcher.stale_nodes_removed_at_start()
+        );
+    }
+    // Subscribe before the nodes start so no decision or truth sample is missed.
+    let ctx = PortContext::with_namespace(&cfg.ports, "run", &args.namespace)?;
+    let truth = ctx.subscriber::<RobotState>(topics::TRUTH)?;
+    let map_sub = ctx.subscriber::<ObjectMap>(topics::MAP)?;
+    let decisions = ctx.subscriber::<PlannerDecision>(topics::DECISION)?;
+    let deadline = ctx.subscriber::<DeadlineEvent>(topics::DEADLINE)?;
+    let nav = ctx.subscriber::<NavGoal>(topics::NAV_GOAL)?;
+    for role in ["recorder", "sim", "mapper", "planner"] {
+        launcher.spawn(ChildSpec {
+            name: role.into(),
+            program: exe.to_path_buf(),
+            args: args.child_args(role),
+            max_restarts: cfg.run.max_restarts,
+            inherit_stdout: false,
+        })?;
+    }
+    let start = Instant::now();
+    let mut log = SessionLog::starting_at(0);
+    let mut map = boxed_zeroed::<ObjectMap>();
+    let (mut sim_ns, mut misses, mut lbv_cycles, mut goal) = (0u64, 0u64, 0u64, None::<NavGoal>);
+    let mut final_state = None;
+    let mut failed = false;
+    let mut last_status = Instant::now();
+    let max_sim_ns = (cfg.run.max_sim_s * 1e9) as u64;
+    let reason = loop {
+        while let Some(s) = truth.receive()? {
+            sim_ns = s.header.sim_time_ns;
+            log.observe_truth(&s);
+        }
+        if let Some(m) = map_sub.latest()? {
+            map.copy_from(&m);
+        }
+        while let Some(d) = decisions.receive()? {
+            log.observe_decision(&d);
+            if d.kind == decision_kind::GBV && d.state != planner_state::RUNNING {
+                final_state = Some(d.state);
+            }
+        }
+        while let Some(e) = deadline.receive()? {
+            if e.thread_name() == "lbv" {
+                lbv_cycles += 1;
+                misses += u64::from(e.missed);
+            }
+        }
+        while let Some(g) = nav.receive()? {
+            goal = Some(*g);
+        }
+        for ev in launcher.poll() {
+            eprintln!("\n{ev}");
+            match ev {
+                ChildEvent::Failed { .. } => failed = true,
+                ChildEvent::Finished { ref name } if name == "planner" && final_state.is_none() => {
+                    final_state = Some(planner_state::NO_CANDIDATES);
+                }
+                _ => {}
+            }
+        }
+        if failed {
+            break "a node failed (see above)".to_string();
+        }
+        if let Some(s) = final_state {
+            break if s == planner_state::TERMINATED {
+                "planner terminated: every cluster complete".into()
+            } else {
+                "planner stopped: no reachable candidate".into()
+            };
+        }
+        if stop.load(Ordering::Relaxed) {
+            break "interrupted".into();
+        }
+        if sim_ns >= max_sim_ns {
+            break format!("simulated-time limit {} s", cfg.run.max_sim_s);
+        }
+        if last_status.elapsed() >= Duration::from_secs(1) {
+            last_status = Instant::now();
+            let objs = map.objects();
+            eprint!(
+                "\r{:>5.0}s wall {:>6.1}s sim | objects {:>2} mapped, {:>2} complete | GBV {} | \
+                 LBV deadline misses {}/{}   ",
+                start.elapsed().as_secs_f64(),
+                sim_ns as f64 * 1e-9,
+                objs.iter().filter(|o| !o.is_background()).count(),
+                objs.iter()
+                    .filter(|o| !o.is_background() && o.is_complete())
+                    .count(),
+                goal.map_or("-".to_string(), |g| format!(
+                    "#{} ({:.1}, {:.1})",
+                    g.goal_id, g.pose[0], g.pose[1]
+                )),
+                misses,
+                lbv_cycles
+            );
+            let _ = std::io::stderr().flush();
+        }
+        std::thread::sleep(Duration::from_millis(10));
+    };
+    eprintln!("\nstopping: {reason}");
+    for (name, exit) in launcher.stop_all(Duration::from_secs_f64(cfg.run.stop_grace_s)) {
+        if let Some(e) = exit {
+            eprintln!("  {name}: {e}");
+        }
+    }
+    // Read what arrived while the nodes stopped (the final map in particular).
+    if let Some(m) = map_sub.latest()? {
+        map.copy_from(&m);
+    }
+    while let Some(s) = truth.receive()? {
+        log.observe_truth(&s);
+    }
+    log.add_deadline_misses(misses);
+    let terminated = final_state == Some(planner_state::TERMINATED);
+    log.finish(sim_ns, terminated, &reason);
+    let run = RunInfo {
+        scene: scene.name.clone(),
+        planner: args.planner.clone(),
+        seed: args.seed,
+    };
+    let gt = lockstep::ground_truth(&scene);
+    let est = eval::estimates_from_map(&map);
+    let metrics = log.metrics(&run, &gt, &est, &MatchParams::default());
+    let plot = log.plot_input(&run, lockstep::room(&scene), &gt, &est, &metrics);
+    eval::write_run_outputs(&args.out, &metrics, &est, &plot)?;
+    Ok(RunOutcome {
+        metrics,
+        reason,
+        failed,
+    })
+}

@@ -1,0 +1,135 @@
+//! `vpsom node mapper`: the mapper on the process's main thread, woken by depth frames.
+
+use super::RunArgs;
+use super::host::{self, Flow, HostError, NodeHost, Pace};
+use crate::app::topics;
+use crate::config::Config;
+use crate::mapper::Mapper;
+use runtime::clock::MonotonicClock;
+use runtime::executor::{ExecutorConfig, SchedPolicy};
+use runtime::ports::{PortContext, Publisher, Received, Subscriber};
+use shm_types::{DepthFrame, Detections, ObjectMap, OccupancyGrid, RobotState};
+use std::sync::atomic::{AtomicBool, Ordering};
+use std::time::{Duration, Instant};
+
+/// `vpsom node mapper`: integrates every depth frame (read in place) with its detections and
+/// the newest estimated state; publishes the object map at `rates.map_hz` (simulated) and the
+/// exploration grid, both written in place into loaned samples.
+pub fn mapper_node(args: &RunArgs, cfg: &Config) -> Result<(), HostError> {
+    let stop = host::stop_on_signals()?;
+    let sched = ExecutorConfig {
+        policy: if cfg.run.mapper_priority > 0 {
+            SchedPolicy::Fifo
+        } else {
+            SchedPolicy::Other
+        },
+        priority: cfg.run.mapper_priority.max(1),
+        ..cfg.executor.clone()
+    };
+    let (cfg, ns) = (cfg.clone(), args.namespace.clone());
+    let pace = Pace::OnData { sched: Some(sched) };
+    host::drive("mapper", &stop, pace, move || MapperHost::new(&cfg, &ns))?;
+    Ok(())
+}
+
+/// The mapper and its ports.
+struct MapperHost {
+    clock: MonotonicClock,
+    depth: Subscriber<DepthFrame>,
+    dets: Subscriber<Detections>,
+    state_sub: Subscriber<RobotState>,
+    map_pub: Publisher<ObjectMap>,
+    grid_pub: Publisher<OccupancyGrid>,
+    mapper: Mapper,
+    /// Map publication period (simulated), ns.
+    map_period: u64,
+    state: RobotState,
+    next_map: u64,
+    /// Detections of a frame not integrated yet.
+    pending: Option<Received<Detections>>,
+    _ctx: PortContext,
+}
+
+impl MapperHost {
+    fn new(cfg: &Config, ns: &str) -> Result<Self, HostError> {
+        let clock = MonotonicClock::new();
+        let ctx = PortContext::with_namespace(&cfg.ports, "mapper", ns)?;
+        Ok(Self {
+            clock,
+            depth: ctx.subscriber(topics::DEPTH)?,
+            dets: ctx.subscriber(topics::DETECTIONS)?,
+            state_sub: ctx.subscriber(topics::STATE)?,
+            map_pub: ctx.publisher(topics::MAP)?,
+            grid_pub: ctx.publisher(topics::MAP_GRID)?,
+            mapper: Mapper::new(&cfg.mapper, &cfg.camera.camera())?,
+            map_period: (1e9 / cfg.rates.map_hz).round() as u64,
+            state: RobotState::default(),
+            next_map: 0,
+            pending: None,
+            _ctx: ctx,
+        })
+    }
+
+    /// The detections of frame `seq`: they follow it closely; older ones are skipped, a newer
+    /// one is kept for its frame. `None` after 500 ms or on stop.
+    fn detections_of(
+        &mut self,
+        seq: u64,
+        stop: &AtomicBool,
+    ) -> Result<Option<Received<Detections>>, HostError> {
+        let deadline = Instant::now() + Duration::from_millis(500);
+        loop {
+            let candidate = match self.pending.take() {
+                Some(d) => Some(d),
+                None => self.dets.receive()?,
+            };
+            match candidate {
+                Some(d) if d.frame_seq == seq => return Ok(Some(d)),
+                Some(d) if d.frame_seq > seq => {
+                    self.pending = Some(d);
+                    return Ok(None);
+                }
+                Some(_) => continue,
+                None => {
+                    if Instant::now() > deadline || stop.load(Ordering::Relaxed) {
+                        return Ok(None);
+                    }
+                    self.pending = self.dets.wait(Duration::from_millis(20))?;
+                }
+            }
+        }
+    }
+}
+
+impl NodeHost for MapperHost {
+    fn step(&mut self, stop: &AtomicBool) -> Result<Flow, HostError> {
+        let frame = match self.depth.wait(Duration::from_millis(200)) {
+            Ok(Some(f)) => f,
+            Ok(None) => return Ok(Flow::Idle),
+            // A stop signal interrupts the wait: leave the loop cleanly.
+            Err(_) if stop.load(Ordering::Relaxed) => return Ok(Flow::Done),
+            Err(e) => return Err(e.into()),
+        };
+        if let Some(s) = self.state_sub.latest()? {
+            self.state = *s;
+        }
+        let Some(det) = self.detections_of(frame.header.seq, stop)? else {
+            eprintln!("mapper: no detections for frame {}", frame.header.seq);
+            return Ok(Flow::Busy);
+        };
+        if let Err(e) = self.mapper.integrate(&frame, &det, &self.state) {
+            eprintln!("mapper: frame {}: {e}", frame.header.seq);
+        }
+        let t = frame.header.sim_time_ns;
+        if t >= self.next_map {
+            let mut m = self.map_pub.loan()?;
+            self.mapper.write_map(&mut m, t);
+            m.send(host::stamp(&self.clock, t))?;
+            let mut g = self.grid_pub.loan()?;
+            self.mapper.write_grid(&mut g);
+            g.send(host::stamp(&self.clock, t))?;
+            self.next_map = t + self.map_period;
+        }
+        Ok(Flow::Busy)
+    }
+}

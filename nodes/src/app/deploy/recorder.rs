@@ -1,0 +1,148 @@
+//! `vpsom node recorder`: every topic to `OUT/trace.mcap`, polled on the main thread; and the
+//! recorder's view of a scene ([`recorder_setup`], also used by the lockstep host).
+
+use super::RunArgs;
+use super::host::{self, Flow, HostError, NodeHost, Pace};
+use crate::app::topics;
+use crate::config::Config;
+use crate::sim::Scene;
+use runtime::ports::{PortContext, Subscriber};
+use runtime::recorder::{MountGeometry, Recorder, RecorderHandle, RecorderSetup, TruthBox};
+use shm_types::{
+    DeadlineEvent, DepthFrame, NavGoal, NeckGoal, ObjectMap, PlannerDecision, RobotState,
+};
+use std::sync::atomic::AtomicBool;
+use std::time::Duration;
+
+/// `vpsom node recorder`: subscribes to every topic and records it to `OUT/trace.mcap`.
+pub fn recorder_node(args: &RunArgs, cfg: &Config) -> Result<(), HostError> {
+    let stop = host::stop_on_signals()?;
+    let (cfg, args) = (cfg.clone(), args.clone());
+    let pace = Pace::Poll {
+        idle: Duration::from_millis(2),
+    };
+    host::drive("recorder", &stop, pace, move || {
+        RecorderHost::new(&args, &cfg)
+    })?;
+    Ok(())
+}
+
+/// What the recorder needs to draw: the scene's true cuboids and the camera geometry.
+pub fn recorder_setup(scene: &Scene, cfg: &Config) -> RecorderSetup {
+    RecorderSetup {
+        scene: scene.name.clone(),
+        mount: MountGeometry {
+            height: cfg.camera.mount.height,
+            forward_offset: cfg.camera.mount.forward_offset,
+            hfov_deg: cfg.camera.hfov_deg,
+            vfov_deg: cfg.camera.vfov_deg,
+        },
+        truth: scene
+            .objects
+            .iter()
+            .map(|o| TruthBox {
+                name: o.name.clone(),
+                class: o.class.clone(),
+                center: o.center.to_array(),
+                size: o.size.to_array(),
+                yaw: o.yaw,
+            })
+            .collect(),
+    }
+}
+
+/// The recorder and a subscriber per recorded topic.
+struct RecorderHost {
+    rec: Recorder,
+    h: RecorderHandle,
+    depth: Subscriber<DepthFrame>,
+    state: Subscriber<RobotState>,
+    truth: Subscriber<RobotState>,
+    map: Subscriber<ObjectMap>,
+    decision: Subscriber<PlannerDecision>,
+    nav: Subscriber<NavGoal>,
+    neck: Subscriber<NeckGoal>,
+    deadline: Subscriber<DeadlineEvent>,
+    _ctx: PortContext,
+}
+
+impl RecorderHost {
+    fn new(args: &RunArgs, cfg: &Config) -> Result<Self, HostError> {
+        let scene = Scene::builtin_or_load(&args.scene)?;
+        let setup = recorder_setup(&scene, cfg);
+        std::fs::create_dir_all(&args.out)?;
+        let rec = Recorder::create(&args.out.join("trace.mcap"), &cfg.recorder, setup)?;
+        let h = rec.handle();
+        let ctx = PortContext::with_namespace(&cfg.ports, "recorder", &args.namespace)?;
+        Ok(Self {
+            rec,
+            h,
+            depth: ctx.subscriber(topics::DEPTH)?,
+            state: ctx.subscriber(topics::STATE)?,
+            truth: ctx.subscriber(topics::TRUTH)?,
+            map: ctx.subscriber(topics::MAP)?,
+            decision: ctx.subscriber(topics::DECISION)?,
+            nav: ctx.subscriber(topics::NAV_GOAL)?,
+            neck: ctx.subscriber(topics::NECK_GOAL)?,
+            deadline: ctx.subscriber(topics::DEADLINE)?,
+            _ctx: ctx,
+        })
+    }
+}
+
+impl NodeHost for RecorderHost {
+    fn step(&mut self, _stop: &AtomicBool) -> Result<Flow, HostError> {
+        let h = &self.h;
+        let mut any = false;
+        while let Some(s) = self.depth.receive()? {
+            h.record_depth(&s);
+            any = true;
+        }
+        while let Some(s) = self.state.receive()? {
+            h.record_state(&s);
+            any = true;
+        }
+        while let Some(s) = self.truth.receive()? {
+            h.record_true_state(&s);
+            any = true;
+        }
+        while let Some(s) = self.map.receive()? {
+            h.record_map(&s);
+            any = true;
+        }
+        while let Some(s) = self.decision.receive()? {
+            h.record_decision(&s);
+            any = true;
+        }
+        while let Some(s) = self.nav.receive()? {
+            h.record_nav_goal(&s);
+            any = true;
+        }
+        while let Some(s) = self.neck.receive()? {
+            h.record_neck_goal(&s);
+            any = true;
+        }
+        while let Some(s) = self.deadline.receive()? {
+            h.record_deadline(&s);
+            any = true;
+        }
+        Ok(if any { Flow::Busy } else { Flow::Idle })
+    }
+
+    fn finish(self) -> Result<(), HostError> {
+        let missed = self.depth.gaps()
+            + self.state.gaps()
+            + self.truth.gaps()
+            + self.map.gaps()
+            + self.decision.gaps();
+        let summary = self.rec.finish()?;
+        eprintln!(
+            "recorder: wrote {} messages, dropped {} in the recorder, {} samples overwritten \
+             before they were read",
+            summary.written.values().sum::<u64>(),
+            summary.drops.total_dropped(),
+            missed
+        );
+        Ok(())
+    }
+}
