@@ -14,7 +14,10 @@
 
 use runtime::clock::{Clock, MonotonicClock};
 use runtime::executor::{Control, Executor, ExecutorConfig, ExecutorError, apply_sched};
-use runtime::ports::{PortError, Stamp};
+use runtime::ports::{
+    ContextError, LoanError, PublisherError, ReceiveError, SendError, Stamp, SubscriberError,
+    WaitError,
+};
 use shm_types::DeadlineEvent;
 use std::error::Error;
 use std::fmt;
@@ -28,9 +31,27 @@ pub enum HostError {
     /// The SIGINT/SIGTERM handler could not be installed.
     #[error("installing signal handler")]
     Signal(#[source] std::io::Error),
-    /// A port (shared memory) operation failed.
+    /// The node's port context (iceoryx2 node) could not be created.
     #[error(transparent)]
-    Port(#[from] PortError),
+    Context(#[from] ContextError),
+    /// A publisher (and its event notifier) could not be created.
+    #[error(transparent)]
+    Publisher(#[from] PublisherError),
+    /// A subscriber (and its event listener) could not be created.
+    #[error(transparent)]
+    Subscriber(#[from] SubscriberError),
+    /// A sample could not be loaned.
+    #[error(transparent)]
+    Loan(#[from] LoanError),
+    /// A sample could not be sent.
+    #[error(transparent)]
+    Send(#[from] SendError),
+    /// A sample could not be received.
+    #[error(transparent)]
+    Receive(#[from] ReceiveError),
+    /// Waiting for data failed.
+    #[error(transparent)]
+    Wait(#[from] WaitError),
     /// The executor could not start, or its thread panicked.
     #[error(transparent)]
     Executor(#[from] ExecutorError),
