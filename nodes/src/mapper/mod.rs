@@ -49,8 +49,8 @@ use object::{FitParams, MappedObject};
 use points::{ExtractParams, PointScratch, SupportPlane};
 use runtime::config::{Checker, ConfigError};
 use shm_types::{
-    DepthFrame, Detections, MAX_OBJECT_POINTS, MAX_OBJECTS, ObjectMap,
-    OccupancyGrid, RobotState, Validate, is_background_class,
+    DepthFrame, Detections, MAX_OBJECT_POINTS, MAX_OBJECTS, ObjectMap, OccupancyGrid, RobotState,
+    Validate, is_background_class,
 };
 use std::collections::HashMap;
 use wilcoxon::RankScratch;
