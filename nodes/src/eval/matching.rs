@@ -84,7 +84,8 @@ pub fn assign(gt: &[GtObject], est: &[EstObject], params: &MatchParams) -> Vec<P
         }
         let dist = |i: usize, j: usize| distance(gt[gi[i]].center, est[ei[j]].center);
         // (Capped far beyond any room, so the integer weights below cannot overflow.)
-        let gate = params.max_pair_dist_m.max(0.0).min(MAX_GATE_M);
+        let gate = params.max_pair_dist_m.max(0.0); // NaN → 0
+        let gate = gate.min(MAX_GATE_M);
         // Lexicographic integer weights (distances in micrometres, so the matching is exact):
         // a pair is worth A·correct + B − d (see the priorities above), a pair beyond the gate 0.
         let um = |m: f64| (m * 1e6).round() as i128;
