@@ -1,4 +1,5 @@
-//! Shared geometry: frames, the robot's camera mount, the pinhole model and cuboids.
+//! Shared geometry: frames, the robot's camera mount, the pinhole model, cuboids and the 2D
+//! convex hull.
 //!
 //! Frames (see `shm_types`): world z up; camera = OpenCV optical frame (x right, y down,
 //! z forward). Poses are `parent_from_child`. Scalars are `f32` (glam), like the messages.
@@ -239,6 +240,53 @@ impl Cuboid {
     }
 }
 
+/// Convex hull of `pts` (Andrew's monotone chain), counter-clockwise starting at the point of
+/// least x (then least y), written to `out[..len]`; returns `len`. Sorts `pts`; collinear and
+/// duplicate points are dropped. With fewer than 3 points the hull is the sorted points.
+/// Allocation-free (the simulator's detector and camera call it per object and frame).
+///
+/// # Panics
+/// If `out` is shorter than `pts.len() + 1` (the chain's working space).
+pub fn convex_hull_into(pts: &mut [Vec2], out: &mut [Vec2]) -> usize {
+    assert!(
+        out.len() > pts.len(),
+        "convex_hull_into: output of {} for {} points",
+        out.len(),
+        pts.len()
+    );
+    pts.sort_unstable_by(|a, b| a.x.total_cmp(&b.x).then(a.y.total_cmp(&b.y)));
+    if pts.len() < 3 {
+        out[..pts.len()].copy_from_slice(pts);
+        return pts.len();
+    }
+    let cross = |o: Vec2, a: Vec2, b: Vec2| (a - o).perp_dot(b - o);
+    let mut k = 0;
+    for &p in pts.iter() {
+        while k >= 2 && cross(out[k - 2], out[k - 1], p) <= 0.0 {
+            k -= 1;
+        }
+        out[k] = p;
+        k += 1;
+    }
+    let lower = k + 1;
+    for &p in pts.iter().rev().skip(1) {
+        while k >= lower && cross(out[k - 2], out[k - 1], p) <= 0.0 {
+            k -= 1;
+        }
+        out[k] = p;
+        k += 1;
+    }
+    k - 1 // the last point repeats the first
+}
+
+/// [`convex_hull_into`] into a reusable vector (cleared first; allocates only to grow).
+pub fn convex_hull(pts: &mut [Vec2], hull: &mut Vec<Vec2>) {
+    hull.clear();
+    hull.resize(pts.len() + 1, Vec2::ZERO);
+    let len = convex_hull_into(pts, hull);
+    hull.truncate(len);
+}
+
 /// Wrap an angle to `(-π, π]`.
 pub fn wrap_angle(a: f32) -> f32 {
     let mut a = a % std::f32::consts::TAU;
@@ -318,5 +366,53 @@ mod tests {
         assert!((wrap_angle(3.0 * PI) - PI).abs() < 1e-5);
         assert!((wrap_angle(-3.0 * PI / 2.0) - FRAC_PI_2).abs() < 1e-5);
         assert_eq!(wrap_angle(0.25), 0.25);
+    }
+
+    #[test]
+    fn hull_of_square_with_interior_points() {
+        let mut pts = vec![
+            Vec2::new(0.0, 0.0),
+            Vec2::new(1.0, 0.0),
+            Vec2::new(1.0, 1.0),
+            Vec2::new(0.0, 1.0),
+            Vec2::new(0.5, 0.5),
+            Vec2::new(0.2, 0.7),
+        ];
+        let mut hull = Vec::new();
+        convex_hull(&mut pts, &mut hull);
+        assert_eq!(hull.len(), 4);
+        assert!(!hull.contains(&Vec2::new(0.5, 0.5)));
+    }
+
+    #[test]
+    fn hull_is_counter_clockwise_from_the_lowest_x_and_drops_collinear_points() {
+        let mut pts = [
+            Vec2::new(4.0, 2.0),
+            Vec2::new(2.0, 0.0), // on the bottom edge
+            Vec2::new(0.0, 0.0),
+            Vec2::new(4.0, 0.0),
+            Vec2::new(0.0, 2.0),
+            Vec2::new(2.0, 1.0),
+            Vec2::new(4.0, 0.0), // duplicate
+        ];
+        let mut out = [Vec2::ZERO; 8];
+        let n = convex_hull_into(&mut pts, &mut out);
+        let want = [(0.0, 0.0), (4.0, 0.0), (4.0, 2.0), (0.0, 2.0)].map(|(x, y)| Vec2::new(x, y));
+        assert_eq!(&out[..n], &want);
+        let mut hull = vec![Vec2::ONE; 20]; // stale contents are cleared
+        convex_hull(&mut pts, &mut hull);
+        assert_eq!(hull, want);
+    }
+
+    #[test]
+    fn hull_of_fewer_than_three_points_is_the_sorted_points() {
+        let mut out = [Vec2::ZERO; 3];
+        assert_eq!(convex_hull_into(&mut [], &mut out), 0);
+        let mut one = [Vec2::new(1.0, 2.0)];
+        assert_eq!(convex_hull_into(&mut one, &mut out), 1);
+        assert_eq!(out[0], Vec2::new(1.0, 2.0));
+        let mut two = [Vec2::new(3.0, 0.0), Vec2::new(1.0, 0.0)];
+        assert_eq!(convex_hull_into(&mut two, &mut out), 2);
+        assert_eq!(out[..2], [Vec2::new(1.0, 0.0), Vec2::new(3.0, 0.0)]);
     }
 }

@@ -1,6 +1,8 @@
 //! One-to-one assignment of estimated objects to ground-truth objects of the same class.
 
 use super::metrics::{EstObject, GtObject};
+use pathfinding::kuhn_munkres::kuhn_munkres;
+use pathfinding::matrix::Matrix;
 use serde::{Deserialize, Serialize};
 
 /// Matching thresholds.
@@ -56,9 +58,13 @@ pub struct ObjectMatch {
     pub correct: bool,
 }
 
+/// Largest `max_pair_dist_m` taken into account, metres.
+const MAX_GATE_M: f64 = 1e9;
+
 /// Assign estimates to ground-truth objects of the same class, each at most once.
 ///
-/// Objective (solved exactly with the Hungarian algorithm, class by class), in strict priority:
+/// Objective (solved exactly with the Hungarian algorithm, class by class, centre distances
+/// rounded to micrometres), in strict priority:
 /// 1. most correct pairs (centre distance < `success_dist_m`), so one-to-one matching never
 ///    costs a correct model that a different pairing would have kept;
 /// 2. most pairs within `max_pair_dist_m`;
@@ -77,27 +83,25 @@ pub fn assign(gt: &[GtObject], est: &[EstObject], params: &MatchParams) -> Vec<P
             continue;
         }
         let dist = |i: usize, j: usize| distance(gt[gi[i]].center, est[ei[j]].center);
-        let gate = params.max_pair_dist_m.max(0.0);
-        let n = gi.len().min(ei.len()) as f64;
-        // Lexicographic weights: a pair is worth A·correct + B − d (see the priorities above).
-        let b = (n + 1.0) * gate + 1.0;
-        let a = n * b + 1.0;
-        let cost: Vec<Vec<f64>> = (0..gi.len())
-            .map(|i| {
-                (0..ei.len())
-                    .map(|j| {
-                        let d = dist(i, j);
-                        if d <= gate {
-                            let correct = if d < params.success_dist_m { a } else { 0.0 };
-                            -(correct + b - d)
-                        } else {
-                            0.0
-                        }
-                    })
-                    .collect()
-            })
-            .collect();
-        for (i, j) in min_cost_assignment(&cost).into_iter().enumerate() {
+        // (Capped far beyond any room, so the integer weights below cannot overflow.)
+        let gate = params.max_pair_dist_m.max(0.0); // NaN → 0
+        let gate = gate.min(MAX_GATE_M);
+        // Lexicographic integer weights (distances in micrometres, so the matching is exact):
+        // a pair is worth A·correct + B − d (see the priorities above), a pair beyond the gate 0.
+        let um = |m: f64| (m * 1e6).round() as i128;
+        let n = gi.len().min(ei.len()) as i128;
+        let b = (n + 1) * um(gate) + 1;
+        let a = n * b + 1;
+        let weights = Matrix::from_fn(gi.len(), ei.len(), |(i, j)| {
+            let d = dist(i, j);
+            if d <= gate {
+                let correct = if d < params.success_dist_m { a } else { 0 };
+                correct + b - um(d)
+            } else {
+                0
+            }
+        });
+        for (i, j) in max_weight_assignment(&weights).into_iter().enumerate() {
             if let Some(j) = j {
                 let d = dist(i, j);
                 if d <= gate {
@@ -122,151 +126,93 @@ pub fn distance(a: [f32; 3], b: [f32; 3]) -> f64 {
         .sqrt()
 }
 
-/// Minimum-cost assignment of rows to columns (Hungarian algorithm with potentials,
-/// O(n² m)). `cost` is a rectangular matrix (rows of equal length); every row is assigned a
-/// distinct column when there are at least as many columns as rows, otherwise every column gets
-/// a distinct row and the remaining rows get `None`. Returns, per row, its column.
-pub fn min_cost_assignment(cost: &[Vec<f64>]) -> Vec<Option<usize>> {
-    let rows = cost.len();
-    let cols = cost.first().map_or(0, Vec::len);
+/// Maximum-weight assignment of rows to columns (Kuhn–Munkres, `pathfinding`). Every row is
+/// assigned a distinct column when there are at least as many columns as rows, otherwise every
+/// column gets a distinct row and the remaining rows get `None`. Returns, per row, its column.
+pub fn max_weight_assignment(weights: &Matrix<i128>) -> Vec<Option<usize>> {
+    let (rows, cols) = (weights.rows, weights.columns);
     if rows == 0 || cols == 0 {
         return vec![None; rows];
     }
     if rows <= cols {
-        hungarian(rows, cols, |i, j| cost[i][j])
-            .into_iter()
-            .map(Some)
-            .collect()
+        kuhn_munkres(weights).1.into_iter().map(Some).collect()
     } else {
-        let col_to_row = hungarian(cols, rows, |i, j| cost[j][i]);
         let mut out = vec![None; rows];
-        for (c, r) in col_to_row.into_iter().enumerate() {
+        for (c, r) in kuhn_munkres(&weights.transposed())
+            .1
+            .into_iter()
+            .enumerate()
+        {
             out[r] = Some(c);
         }
         out
     }
 }
 
-/// Hungarian algorithm for `n ≤ m`: returns the column of each row.
-fn hungarian(n: usize, m: usize, cost: impl Fn(usize, usize) -> f64) -> Vec<usize> {
-    // 1-based potentials; column 0 is a virtual column holding the row being inserted.
-    let mut u = vec![0.0f64; n + 1];
-    let mut v = vec![0.0f64; m + 1];
-    let mut row_of = vec![0usize; m + 1];
-    let mut way = vec![0usize; m + 1];
-    for i in 1..=n {
-        row_of[0] = i;
-        let mut j0 = 0usize;
-        let mut minv = vec![f64::INFINITY; m + 1];
-        let mut used = vec![false; m + 1];
-        loop {
-            used[j0] = true;
-            let i0 = row_of[j0];
-            let mut delta = f64::INFINITY;
-            let mut j1 = 0usize;
-            for j in 1..=m {
-                if !used[j] {
-                    let cur = cost(i0 - 1, j - 1) - u[i0] - v[j];
-                    if cur < minv[j] {
-                        minv[j] = cur;
-                        way[j] = j0;
-                    }
-                    if minv[j] < delta {
-                        delta = minv[j];
-                        j1 = j;
-                    }
-                }
-            }
-            for j in 0..=m {
-                if used[j] {
-                    u[row_of[j]] += delta;
-                    v[j] -= delta;
-                } else {
-                    minv[j] -= delta;
-                }
-            }
-            j0 = j1;
-            if row_of[j0] == 0 {
-                break;
-            }
-        }
-        loop {
-            let j1 = way[j0];
-            row_of[j0] = row_of[j1];
-            j0 = j1;
-            if j0 == 0 {
-                break;
-            }
-        }
-    }
-    let mut col_of = vec![0usize; n];
-    for j in 1..=m {
-        if row_of[j] != 0 {
-            col_of[row_of[j] - 1] = j - 1;
-        }
-    }
-    col_of
-}
-
 #[cfg(test)]
 mod tests {
     use super::*;
 
-    fn total(cost: &[Vec<f64>], a: &[Option<usize>]) -> f64 {
+    fn total(w: &Matrix<i128>, a: &[Option<usize>]) -> i128 {
         a.iter()
             .enumerate()
-            .filter_map(|(i, j)| j.map(|j| cost[i][j]))
+            .filter_map(|(i, j)| j.map(|j| w[(i, j)]))
             .sum()
     }
 
-    /// Brute force over all injective maps of the smaller side.
-    fn brute(cost: &[Vec<f64>]) -> f64 {
-        fn rec(cost: &[Vec<f64>], i: usize, used: &mut Vec<bool>) -> f64 {
-            if i == cost.len() {
-                return 0.0;
+    /// Brute force over all injective maps of the rows (rows ≤ columns).
+    fn brute(w: &Matrix<i128>) -> i128 {
+        fn rec(w: &Matrix<i128>, i: usize, used: &mut Vec<bool>) -> i128 {
+            if i == w.rows {
+                return 0;
             }
-            let mut best = f64::INFINITY;
+            let mut best = i128::MIN;
             for j in 0..used.len() {
                 if !used[j] {
                     used[j] = true;
-                    best = best.min(cost[i][j] + rec(cost, i + 1, used));
+                    best = best.max(w[(i, j)] + rec(w, i + 1, used));
                     used[j] = false;
                 }
             }
             best
         }
-        rec(cost, 0, &mut vec![false; cost[0].len()])
+        rec(w, 0, &mut vec![false; w.columns])
     }
 
     #[test]
-    fn hungarian_is_optimal_on_small_matrices() {
-        // Deterministic pseudo-random matrices of shapes up to 5 × 6.
+    fn kuhn_munkres_is_optimal_on_small_matrices() {
+        // Deterministic pseudo-random matrices of shapes up to 5 × 6, and their transposes.
         let mut s = 12345u64;
         let mut next = || {
             s = s
                 .wrapping_mul(6364136223846793005)
                 .wrapping_add(1442695040888963407);
-            ((s >> 33) % 1000) as f64 / 100.0
+            ((s >> 33) % 1000) as i128 - 500
         };
         for rows in 1..=5 {
             for cols in rows..=6 {
-                let cost: Vec<Vec<f64>> = (0..rows)
-                    .map(|_| (0..cols).map(|_| next()).collect())
-                    .collect();
-                let a = min_cost_assignment(&cost);
+                let w = Matrix::from_fn(rows, cols, |_| next());
+                let a = max_weight_assignment(&w);
                 let mut cols_used: Vec<usize> = a.iter().map(|j| j.unwrap()).collect();
                 cols_used.sort_unstable();
                 cols_used.dedup();
                 assert_eq!(cols_used.len(), rows, "columns must be distinct");
-                assert!((total(&cost, &a) - brute(&cost)).abs() < 1e-9);
+                assert_eq!(total(&w, &a), brute(&w));
+                let t = w.transposed();
+                let at = max_weight_assignment(&t);
+                assert_eq!(at.iter().flatten().count(), rows, "one row per column");
+                assert_eq!(total(&t, &at), brute(&w));
             }
         }
     }
 
     #[test]
     fn more_rows_than_columns_leaves_rows_unassigned() {
-        let cost = vec![vec![5.0], vec![1.0], vec![3.0]];
-        assert_eq!(min_cost_assignment(&cost), vec![None, Some(0), None]);
-        assert_eq!(min_cost_assignment(&[]), Vec::<Option<usize>>::new());
+        let w = Matrix::from_rows([[-5], [-1], [-3]]).unwrap();
+        assert_eq!(max_weight_assignment(&w), vec![None, Some(0), None]);
+        assert_eq!(
+            max_weight_assignment(&Matrix::<i128>::new(0, 0, 0)),
+            Vec::<Option<usize>>::new()
+        );
     }
 }

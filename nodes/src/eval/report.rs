@@ -9,6 +9,7 @@
 use super::metrics::Metrics;
 use super::plot::Figure;
 use super::{EvalError, METRICS_FILE, read_json};
+use statrs::statistics::Statistics;
 use std::collections::BTreeMap;
 use std::fmt::Write as _;
 use std::path::{Path, PathBuf};
@@ -214,12 +215,8 @@ impl Stat {
         if n == 0 {
             return None;
         }
-        let mean = values.iter().sum::<f64>() / n as f64;
-        let std = if n > 1 {
-            (values.iter().map(|v| (v - mean).powi(2)).sum::<f64>() / (n - 1) as f64).sqrt()
-        } else {
-            0.0
-        };
+        let mean = values.mean();
+        let std = if n > 1 { values.std_dev() } else { 0.0 };
         Some(Stat { mean, std, n })
     }
 }
@@ -354,26 +351,30 @@ impl Report {
 
     /// Long-format CSV of a table: `table,scene,planner,metric,mean,std,n`.
     pub fn csv(&self, table: &str, defs: &[MetricDef]) -> String {
-        let mut out = String::from("table,scene,planner,metric,mean,std,n\n");
+        // Writing equal-length records to memory cannot fail.
+        const MEMORY: &str = "CSV into memory";
+        let mut w = csv::Writer::from_writer(Vec::new());
+        w.write_record(["table", "scene", "planner", "metric", "mean", "std", "n"])
+            .expect(MEMORY);
         for scene in self.rows() {
             for def in defs {
                 for planner in &self.planners {
                     if let Some(s) = self.cell(&scene, planner, def.key) {
-                        let _ = writeln!(
-                            out,
-                            "{table},{},{},{},{},{},{}",
-                            csv_field(&scene),
-                            csv_field(planner),
+                        w.write_record([
+                            table,
+                            &scene,
+                            planner,
                             def.key,
-                            s.mean,
-                            s.std,
-                            s.n
-                        );
+                            &s.mean.to_string(),
+                            &s.std.to_string(),
+                            &s.n.to_string(),
+                        ])
+                        .expect(MEMORY);
                     }
                 }
             }
         }
-        out
+        String::from_utf8(w.into_inner().expect(MEMORY)).expect("CSV of UTF-8 fields is UTF-8")
     }
 
     /// The markdown report (tables, paper reference columns, optional figures).
@@ -480,14 +481,6 @@ over all assigned pairs. Length of path = true base path (m); Cost time = simula
 termination; Non-occlusion = mean H_IoU (eq. 21) over the foreground objects in view of every
 chosen GBV and LBV; Localization failure = episodes of the failure model.
 ";
-
-fn csv_field(s: &str) -> String {
-    if s.contains([',', '"', '\n']) {
-        format!("\"{}\"", s.replace('"', "\"\""))
-    } else {
-        s.to_string()
-    }
-}
 
 /// Every `metrics.json` under the given paths: a path that is a file is taken as is, a
 /// directory is searched recursively (e.g. `DIR/<scene>/<planner>/<seed>/metrics.json`).

@@ -13,6 +13,7 @@
 //!   upper points; the footprint comes from the points on that plane, and the cuboid extends from
 //!   the plane down to the floor (z = 0).
 
+use crate::geom::convex_hull;
 use glam::{Vec2, Vec3};
 
 /// An estimated upright cuboid.
@@ -33,34 +34,6 @@ pub struct CuboidScratch {
     hull: Vec<Vec2>,
     vals: Vec<f32>,
     plane: Vec<Vec3>,
-}
-
-fn cross(o: Vec2, a: Vec2, b: Vec2) -> f32 {
-    (a - o).perp_dot(b - o)
-}
-
-/// Convex hull (Andrew's monotone chain), counter-clockwise, into `hull`. Sorts `pts`.
-pub fn convex_hull(pts: &mut [Vec2], hull: &mut Vec<Vec2>) {
-    hull.clear();
-    pts.sort_unstable_by(|a, b| a.x.total_cmp(&b.x).then(a.y.total_cmp(&b.y)));
-    if pts.len() < 3 {
-        hull.extend_from_slice(pts);
-        return;
-    }
-    for &p in pts.iter() {
-        while hull.len() >= 2 && cross(hull[hull.len() - 2], hull[hull.len() - 1], p) <= 0.0 {
-            hull.pop();
-        }
-        hull.push(p);
-    }
-    let lower = hull.len() + 1;
-    for &p in pts.iter().rev().skip(1) {
-        while hull.len() >= lower && cross(hull[hull.len() - 2], hull[hull.len() - 1], p) <= 0.0 {
-            hull.pop();
-        }
-        hull.push(p);
-    }
-    hull.pop();
 }
 
 /// Area of the bounding rectangle of `hull` aligned with angle `yaw`.
@@ -343,22 +316,6 @@ mod tests {
             std::f32::consts::FRAC_PI_2,
         );
         assert!((a.iou(&e) - 1.0).abs() < 1e-5);
-    }
-
-    #[test]
-    fn hull_of_square_with_interior_points() {
-        let mut pts = vec![
-            Vec2::new(0.0, 0.0),
-            Vec2::new(1.0, 0.0),
-            Vec2::new(1.0, 1.0),
-            Vec2::new(0.0, 1.0),
-            Vec2::new(0.5, 0.5),
-            Vec2::new(0.2, 0.7),
-        ];
-        let mut hull = Vec::new();
-        convex_hull(&mut pts, &mut hull);
-        assert_eq!(hull.len(), 4);
-        assert!(!hull.contains(&Vec2::new(0.5, 0.5)));
     }
 
     #[test]

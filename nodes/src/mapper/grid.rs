@@ -7,80 +7,9 @@
 //! (hit +4, pass −1): never touched → unknown, score > 0 → occupied, else free.
 
 use glam::{Affine3A, Vec2};
-use runtime::config::{Checker, ConfigError};
-use serde::Deserialize;
-use shm_types::{DepthFrame, MAX_GRID_CELLS, OccupancyGrid, grid_cell};
+use shm_types::{DepthFrame, OccupancyGrid, grid_cell};
 
-/// `[mapper.grid]` section.
-#[derive(Debug, Clone, PartialEq, Deserialize)]
-#[serde(deny_unknown_fields, default)]
-pub struct GridConfig {
-    /// Build the grid at all.
-    pub enabled: bool,
-    /// World `[x, y]` of the corner of cell (0, 0), metres.
-    pub origin: [f32; 2],
-    /// Cell edge, metres.
-    pub resolution: f32,
-    /// Cells along x.
-    pub width: u32,
-    /// Cells along y.
-    pub height: u32,
-    /// Lowest obstacle height, metres.
-    pub min_z: f32,
-    /// Highest obstacle height, metres.
-    pub max_z: f32,
-    /// Pixel stride of the rays.
-    pub stride: u32,
-    /// Longest horizontal ray, metres.
-    pub max_range: f32,
-}
-
-impl Default for GridConfig {
-    fn default() -> Self {
-        Self {
-            enabled: true,
-            origin: [-6.4, -6.4],
-            resolution: 0.05,
-            width: 256,
-            height: 256,
-            min_z: 0.1,
-            max_z: 1.8,
-            stride: 8,
-            max_range: 4.0,
-        }
-    }
-}
-
-impl GridConfig {
-    /// Range-check.
-    pub fn validate(&self, c: &Checker) -> Result<(), ConfigError> {
-        c.in_range("mapper.grid.origin[0]", self.origin[0].into(), -1e4, 1e4)?;
-        c.in_range("mapper.grid.origin[1]", self.origin[1].into(), -1e4, 1e4)?;
-        c.in_range("mapper.grid.resolution", self.resolution.into(), 0.01, 1.0)?;
-        c.count("mapper.grid.width", self.width as usize, 1, MAX_GRID_CELLS)?;
-        c.count(
-            "mapper.grid.height",
-            self.height as usize,
-            1,
-            MAX_GRID_CELLS,
-        )?;
-        c.require(
-            self.width as usize * self.height as usize <= MAX_GRID_CELLS,
-            "mapper.grid.height",
-            self.height,
-            &format!("width × height must be ≤ {MAX_GRID_CELLS}"),
-        )?;
-        c.in_range("mapper.grid.min_z", self.min_z.into(), 0.0, 5.0)?;
-        c.require(
-            self.max_z > self.min_z && self.max_z <= 10.0,
-            "mapper.grid.max_z",
-            self.max_z,
-            "must be > mapper.grid.min_z and ≤ 10",
-        )?;
-        c.count("mapper.grid.stride", self.stride as usize, 1, 64)?;
-        c.in_range("mapper.grid.max_range", self.max_range.into(), 0.1, 50.0)
-    }
-}
+pub use super::config::GridConfig;
 
 const UNKNOWN: i8 = i8::MIN;
 const HIT: i8 = 4;

@@ -7,15 +7,14 @@
 //! inflated map twice closes every corridor narrower than four robot radii that the base can in
 //! fact drive (in paper-scene-2 the passages around the second desk), so the two cases are kept
 //! apart. A pose is in collision when its cell is inflated; a pose is reachable when a path of
-//! free 8-connected cells leads to it from the robot's cell (Dijkstra with step costs 1 and √2,
-//! giving path lengths). The robot may start inside the inflated band (e.g. after odometry
+//! free 8-connected cells leads to it from the robot's cell (`pathfinding`'s Dijkstra with step
+//! costs 1 and √2, giving path lengths). The robot may start inside the inflated band (e.g. after odometry
 //! drift): cells within the robot radius of the start that are not obstacles themselves are
 //! traversable. An empty grid (width or height 0) means "no obstacle information": everything
 //! is reachable at straight-line distance.
 
+use pathfinding::directed::dijkstra::dijkstra_all;
 use shm_types::{OccupancyGrid, grid_cell};
-use std::cmp::Reverse;
-use std::collections::BinaryHeap;
 
 /// Whether a grid value is an obstacle.
 pub fn is_obstacle(v: u8, unknown_is_obstacle: bool) -> bool {
@@ -182,18 +181,12 @@ impl NavMap {
             let (dx, dy) = (c[0] - start[0], c[1] - start[1]);
             dx * dx + dy * dy <= escape2
         };
-        // Integer costs (10 straight, 14 diagonal) keep the heap ordering exact.
-        let mut cost = vec![u32::MAX; self.w * self.h];
-        let mut heap = BinaryHeap::new();
-        cost[s] = 0;
-        heap.push(Reverse((0u32, s)));
+        // Integer costs (10 straight, 14 diagonal) keep the distances exact.
         let (w, h) = (self.w as isize, self.h as isize);
-        while let Some(Reverse((c, i))) = heap.pop() {
-            if c > cost[i] {
-                continue;
-            }
-            let (x, y) = ((i % self.w) as isize, (i / self.w) as isize);
-            for (dx, dy, step) in [
+        let this = &*self;
+        let steps = |&i: &usize| {
+            let (x, y) = ((i % this.w) as isize, (i / this.w) as isize);
+            [
                 (1, 0, 10),
                 (-1, 0, 10),
                 (0, 1, 10),
@@ -202,34 +195,32 @@ impl NavMap {
                 (1, -1, 14),
                 (-1, 1, 14),
                 (-1, -1, 14),
-            ] {
+            ]
+            .into_iter()
+            .filter_map(move |(dx, dy, step)| {
                 let (nx, ny) = (x + dx, y + dy);
                 if nx < 0 || ny < 0 || nx >= w || ny >= h {
-                    continue;
+                    return None;
                 }
-                let j = ny as usize * self.w + nx as usize;
+                let j = ny as usize * this.w + nx as usize;
                 // No corner cutting between two blocked cells.
                 if dx != 0 && dy != 0 {
-                    let a = y as usize * self.w + nx as usize;
-                    let b = ny as usize * self.w + x as usize;
-                    if !traversable(self, a) && !traversable(self, b) {
-                        continue;
+                    let a = y as usize * this.w + nx as usize;
+                    let b = ny as usize * this.w + x as usize;
+                    if !traversable(this, a) && !traversable(this, b) {
+                        return None;
                     }
                 }
-                if !traversable(self, j) {
-                    continue;
-                }
-                let nc = c + step;
-                if nc < cost[j] {
-                    cost[j] = nc;
-                    heap.push(Reverse((nc, j)));
-                }
-            }
-        }
-        for (d, c) in self.dist.iter_mut().zip(&cost) {
-            if *c != u32::MAX {
-                *d = *c as f32 / 10.0 * self.res;
-            }
+                traversable(this, j).then_some((j, step))
+            })
+        };
+        let cost: Vec<(usize, u32)> = dijkstra_all(&s, steps)
+            .into_iter()
+            .map(|(i, (_, c))| (i, c))
+            .collect();
+        self.dist[s] = 0.0;
+        for (i, c) in cost {
+            self.dist[i] = c as f32 / 10.0 * self.res;
         }
     }
 

@@ -1,10 +1,10 @@
 //! The simulated depth camera: ray casting with rayon over image rows, Kinect-like noise.
 
 use super::config::SimConfig;
-use super::detector::{POLY_CAP, convex_hull};
+use super::detector::POLY_CAP;
 use super::world::{STRUCTURE, World};
 use crate::config::CameraConfig;
-use crate::geom::Camera;
+use crate::geom::{Camera, convex_hull_into};
 use glam::{Affine3A, Mat3, Vec2, Vec3};
 use parry3d::query::Ray;
 use rand::Rng;
@@ -241,7 +241,7 @@ impl DepthCamera {
             if front > 0 && behind > 0 {
                 span.rows = [0, h]; // partly behind the camera: every pixel may see it
             } else if front > 0 {
-                span.hull_len = convex_hull(&mut img, &mut span.hull);
+                span.hull_len = convex_hull_into(&mut img, &mut span.hull);
                 let (lo, hi) = span.hull[..span.hull_len]
                     .iter()
                     .fold((f32::INFINITY, f32::NEG_INFINITY), |(lo, hi), p| {

@@ -15,7 +15,7 @@
 
 use super::config::DetectorConfig;
 use super::scene::{Scene, Shape};
-use crate::geom::Camera;
+use crate::geom::{Camera, convex_hull_into};
 use glam::{Affine3A, Mat3, Vec2, Vec3};
 use rand::Rng;
 use rand_distr::StandardNormal;
@@ -317,35 +317,12 @@ impl Detector {
             *q = camera.project(pc)?;
         }
         let mut hull = [Vec2::ZERO; POLY_CAP];
-        let m = convex_hull(&mut img[..*n], &mut hull);
+        let m = convex_hull_into(&mut img[..*n], &mut hull);
         Some(clipped_area(
             &hull[..m],
             Vec2::new(camera.width as f32, camera.height as f32),
         ))
     }
-}
-
-/// Andrew's monotone chain; writes the hull counter-clockwise into `out`, returns its length.
-pub(super) fn convex_hull(pts: &mut [Vec2], out: &mut [Vec2; POLY_CAP]) -> usize {
-    pts.sort_unstable_by(|a, b| a.x.total_cmp(&b.x).then(a.y.total_cmp(&b.y)));
-    let cross = |o: Vec2, a: Vec2, b: Vec2| (a - o).perp_dot(b - o);
-    let mut k = 0;
-    for &p in pts.iter() {
-        while k >= 2 && cross(out[k - 2], out[k - 1], p) <= 0.0 {
-            k -= 1;
-        }
-        out[k] = p;
-        k += 1;
-    }
-    let lower = k + 1;
-    for &p in pts.iter().rev().skip(1) {
-        while k >= lower && cross(out[k - 2], out[k - 1], p) <= 0.0 {
-            k -= 1;
-        }
-        out[k] = p;
-        k += 1;
-    }
-    k.saturating_sub(1)
 }
 
 /// Area of a convex polygon clipped to the rectangle `[0, size]`.
@@ -395,7 +372,7 @@ mod tests {
     use super::*;
 
     #[test]
-    fn hull_and_clipping_give_exact_areas() {
+    fn clipping_gives_exact_areas() {
         let mut pts = [
             Vec2::new(0.0, 0.0),
             Vec2::new(4.0, 0.0),
@@ -405,7 +382,7 @@ mod tests {
             Vec2::new(1.0, 1.5),
         ];
         let mut hull = [Vec2::ZERO; POLY_CAP];
-        let m = convex_hull(&mut pts, &mut hull);
+        let m = convex_hull_into(&mut pts, &mut hull);
         assert_eq!(m, 4);
         assert!((clipped_area(&hull[..m], Vec2::new(10.0, 10.0)) - 8.0).abs() < 1e-5);
         assert!((clipped_area(&hull[..m], Vec2::new(3.0, 1.0)) - 3.0).abs() < 1e-5);

@@ -1,11 +1,12 @@
 //! The pre-built navigation map (obstacle footprints and walls inflated by the robot radius) and
-//! an 8-connected A* planner on it.
+//! an 8-connected A* planner on it (`pathfinding`'s A*, octile heuristic).
 
 use super::scene::Scene;
 use glam::Vec2;
+use pathfinding::directed::astar::astar;
+use pathfinding::num_traits::Zero;
 use shm_types::{MAX_GRID_CELLS, OccupancyGrid, grid_cell};
 use std::cmp::Ordering;
-use std::collections::BinaryHeap;
 
 /// Why a navigation goal was refused (reported with `nav_status::UNREACHABLE`).
 #[derive(Debug, Clone, PartialEq, thiserror::Error)]
@@ -154,10 +155,7 @@ impl NavGrid {
         }
         let (sx, sy) = self.cell(start).ok_or(NavRefusal::NoPath { x, y })?;
         let s = sy * self.width + sx;
-        let n = self.width * self.height;
-        let mut cost = vec![f32::INFINITY; n];
-        let mut parent = vec![u32::MAX; n];
-        let mut heap = BinaryHeap::new();
+        // Octile distance: admissible and consistent on this 8-connected grid.
         let h = |i: usize| {
             let (dx, dy) = (
                 (i % self.width).abs_diff(gx) as f32,
@@ -165,57 +163,13 @@ impl NavGrid {
             );
             dx.max(dy) + (std::f32::consts::SQRT_2 - 1.0) * dx.min(dy)
         };
-        cost[s] = 0.0;
-        heap.push(Open(h(s), s));
-        while let Some(Open(f, i)) = heap.pop() {
-            if i == g {
-                break;
-            }
-            if f > cost[i] + h(i) + 1e-4 {
-                continue; // stale entry
-            }
-            let (ix, iy) = ((i % self.width) as isize, (i / self.width) as isize);
-            for (dx, dy) in NEIGHBOURS {
-                let (nx, ny) = (ix + dx, iy + dy);
-                if nx < 0 || ny < 0 || nx >= self.width as isize || ny >= self.height as isize {
-                    continue;
-                }
-                let j = ny as usize * self.width + nx as usize;
-                if self.occupied[j] {
-                    continue;
-                }
-                // No corner cutting between two obstacles.
-                if dx != 0
-                    && dy != 0
-                    && (self.occupied[iy as usize * self.width + nx as usize]
-                        || self.occupied[ny as usize * self.width + ix as usize])
-                {
-                    continue;
-                }
-                let step = if dx != 0 && dy != 0 {
-                    std::f32::consts::SQRT_2
-                } else {
-                    1.0
-                };
-                let c = cost[i] + step;
-                if c < cost[j] {
-                    cost[j] = c;
-                    parent[j] = i as u32;
-                    heap.push(Open(c + h(j), j));
-                }
-            }
-        }
-        if !cost[g].is_finite() {
-            return Err(NavRefusal::NoPath { x, y });
-        }
-        let mut cells = vec![g];
-        while let Some(&last) = cells.last() {
-            if last == s {
-                break;
-            }
-            cells.push(parent[last] as usize);
-        }
-        cells.reverse();
+        let (cells, _) = astar(
+            &s,
+            |&i| self.steps(i),
+            |&i| Cost { len: h(i), cell: i },
+            |&i| i == g,
+        )
+        .ok_or(NavRefusal::NoPath { x, y })?;
         let mut points: Vec<Vec2> = cells
             .iter()
             .map(|&i| self.center(i % self.width, i / self.width))
@@ -225,6 +179,35 @@ impl NavGrid {
             *last = goal;
         }
         Ok(self.shortcut(&points))
+    }
+
+    /// The free 8-neighbours of cell `i` and the step lengths to them (1 or √2, in cells), in
+    /// `NEIGHBOURS` order; no corner cutting between two obstacles.
+    fn steps(&self, i: usize) -> impl Iterator<Item = (usize, Cost)> + '_ {
+        let (ix, iy) = ((i % self.width) as isize, (i / self.width) as isize);
+        NEIGHBOURS.into_iter().filter_map(move |(dx, dy)| {
+            let (nx, ny) = (ix + dx, iy + dy);
+            if nx < 0 || ny < 0 || nx >= self.width as isize || ny >= self.height as isize {
+                return None;
+            }
+            let j = ny as usize * self.width + nx as usize;
+            if self.occupied[j] {
+                return None;
+            }
+            let diagonal = dx != 0 && dy != 0;
+            if diagonal
+                && (self.occupied[iy as usize * self.width + nx as usize]
+                    || self.occupied[ny as usize * self.width + ix as usize])
+            {
+                return None;
+            }
+            let len = if diagonal {
+                std::f32::consts::SQRT_2
+            } else {
+                1.0
+            };
+            Some((j, Cost { len, cell: 0 }))
+        })
     }
 
     /// Drop waypoints that a straight free segment can skip.
@@ -266,19 +249,46 @@ const NEIGHBOURS: [(isize, isize); 8] = [
     (-1, -1),
 ];
 
-/// Open-list entry ordered by smallest f first.
-#[derive(Debug, PartialEq)]
-struct Open(f32, usize);
+/// An A* cost: a path length in cells, plus (in the heuristic, hence in the estimate `g + h`
+/// that orders the open list) the cell index, so that among equal estimates the lowest cell is
+/// expanded first — a deterministic tie-break. Path costs themselves carry `cell == 0`, so they
+/// compare by length alone.
+#[derive(Debug, Clone, Copy, PartialEq)]
+struct Cost {
+    len: f32,
+    cell: usize,
+}
 
-impl Eq for Open {}
-
-impl Ord for Open {
-    fn cmp(&self, other: &Self) -> Ordering {
-        other.0.total_cmp(&self.0).then(other.1.cmp(&self.1))
+impl std::ops::Add for Cost {
+    type Output = Cost;
+    fn add(self, o: Cost) -> Cost {
+        Cost {
+            len: self.len + o.len,
+            cell: self.cell + o.cell,
+        }
     }
 }
 
-impl PartialOrd for Open {
+impl Zero for Cost {
+    fn zero() -> Cost {
+        Cost { len: 0.0, cell: 0 }
+    }
+    fn is_zero(&self) -> bool {
+        *self == Cost::zero()
+    }
+}
+
+impl Eq for Cost {}
+
+impl Ord for Cost {
+    fn cmp(&self, other: &Self) -> Ordering {
+        self.len
+            .total_cmp(&other.len)
+            .then(self.cell.cmp(&other.cell))
+    }
+}
+
+impl PartialOrd for Cost {
     fn partial_cmp(&self, other: &Self) -> Option<Ordering> {
         Some(self.cmp(other))
     }

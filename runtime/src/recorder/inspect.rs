@@ -343,14 +343,6 @@ impl fmt::Display for TraceInfo {
     }
 }
 
-fn csv_field(s: &str) -> String {
-    if s.contains([',', '"', '\n', '\r']) {
-        format!("\"{}\"", s.replace('"', "\"\""))
-    } else {
-        s.to_string()
-    }
-}
-
 fn scalar(v: &serde_json::Value) -> String {
     match v {
         serde_json::Value::Null => String::new(),
@@ -441,14 +433,13 @@ pub fn export_csv(path: &Path, topic: &str, out: &mut dyn Write) -> Result<u64, 
     if let Some(b) = bad {
         return Err(read_err(path, format!("{topic}: {b}")));
     }
-    let io = |e: std::io::Error| read_err(path, format!("cannot write CSV: {e}"));
-    let header: Vec<String> = std::iter::once("log_time_ns".to_string())
-        .chain(columns.iter().map(|c| csv_field(c)))
-        .collect();
-    writeln!(out, "{}", header.join(",")).map_err(io)?;
+    let csv_err = |e: csv::Error| read_err(path, format!("cannot write CSV: {e}"));
+    let mut csv = csv::Writer::from_writer(out);
+    csv.write_record(std::iter::once("log_time_ns").chain(columns.iter().map(String::as_str)))
+        .map_err(csv_err)?;
     let mut rows = 0u64;
     let mut failed = None;
-    let mut row = vec![String::new(); columns.len()];
+    let mut row = vec![String::new(); columns.len() + 1];
     scan(path, |item| {
         if let Item::Message {
             channel,
@@ -462,19 +453,22 @@ pub fn export_csv(path: &Path, topic: &str, out: &mut dyn Write) -> Result<u64, 
                 return;
             };
             row.iter_mut().for_each(String::clear);
+            row[0] = log_time.to_string();
             for (k, x) in flatten(&v) {
                 if let Some(&i) = col_index.get(&k) {
-                    row[i] = csv_field(&x);
+                    row[i + 1] = x;
                 }
             }
-            if let Err(e) = writeln!(out, "{log_time},{}", row.join(",")) {
+            if let Err(e) = csv.write_record(&row) {
                 failed = Some(e);
             }
             rows += 1;
         }
     })?;
     if let Some(e) = failed {
-        return Err(io(e));
+        return Err(csv_err(e));
     }
+    csv.flush()
+        .map_err(|e| read_err(path, format!("cannot write CSV: {e}")))?;
     Ok(rows)
 }

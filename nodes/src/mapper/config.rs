@@ -1,0 +1,393 @@
+//! The `[mapper]` section of the configuration and its sub-sections (`[mapper.association]`,
+//! `[mapper.sopm]`, `[mapper.grid]`): one struct per table, defaults and range checks.
+
+use super::sopm::{SopmParams, SopmShape};
+use runtime::config::{Checker, ConfigError};
+use serde::Deserialize;
+use shm_types::{MAX_GRID_CELLS, MAX_SOPM_CELLS};
+
+/// `[mapper]` section.
+#[derive(Debug, Clone, PartialEq, Deserialize)]
+#[serde(deny_unknown_fields, default)]
+pub struct MapperConfig {
+    /// Minimum pixel stride when back-projecting a detection's mask.
+    pub pixel_stride: u32,
+    /// The stride grows so that about this many pixels at most are sampled per detection.
+    pub max_points_per_detection: u32,
+    /// Detections with fewer cleaned points are ignored.
+    pub min_points: u32,
+    /// Points closer than this to the floor are dropped, metres.
+    pub floor_margin: f32,
+    /// Half-thickness of a supporting plane, metres (bleed removal and background footprint).
+    pub support_margin: f32,
+    /// Smallest depth step that still connects neighbouring samples (outlier filter), metres.
+    pub gap_min: f32,
+    /// Depth-step allowance between neighbouring samples, in lateral sample spacings.
+    pub gap_factor: f32,
+    /// Voxel edge of a foreground object's merged cloud, metres.
+    pub object_voxel: f32,
+    /// Voxel edge of a background object's merged cloud, metres.
+    pub background_voxel: f32,
+    /// Voxel cap per object (later points only refine existing voxels).
+    pub max_object_voxels: u32,
+    /// Quantile used as robust min/max for cuboid extents.
+    pub extent_quantile: f32,
+    /// The same for background footprints (dense, flat tops with few outliers).
+    pub background_extent_quantile: f32,
+    /// Keep the previous yaw while its rectangle area is within this fraction of the optimum.
+    pub yaw_keep_tolerance: f32,
+    /// Lowest supporting-plane height of a background object, metres.
+    pub min_support_height: f32,
+    /// Objects with fewer associated detections are not published.
+    pub min_observations: u32,
+    /// Duplicate merge: two objects of compatible classes whose cuboids (background: footprints)
+    /// have at least this IoU are one object.
+    pub merge_iou: f32,
+    /// Duplicate merge: ... or when this fraction of the smaller cuboid (footprint) lies inside
+    /// the larger one and the smaller one's centre is inside it.
+    pub merge_containment: f32,
+    /// Duplicate merge: the containment test grows the larger cuboid by this margin (m), so a
+    /// thin fragment split off an object's edge (mask bleed, grazing views) is still absorbed;
+    /// keep it below the gap between neighbouring objects of one class (~5 cm on a desk).
+    pub merge_margin: f32,
+    /// Association.
+    pub association: AssociationConfig,
+    /// Surface occupancy probability maps.
+    pub sopm: SopmConfig,
+    /// Exploration occupancy grid.
+    pub grid: GridConfig,
+}
+
+impl Default for MapperConfig {
+    fn default() -> Self {
+        Self {
+            pixel_stride: 2,
+            max_points_per_detection: 3000,
+            min_points: 30,
+            floor_margin: 0.03,
+            support_margin: 0.015,
+            gap_min: 0.03,
+            gap_factor: 4.0,
+            object_voxel: 0.01,
+            background_voxel: 0.03,
+            max_object_voxels: 20000,
+            extent_quantile: 0.05,
+            background_extent_quantile: 0.01,
+            yaw_keep_tolerance: 0.03,
+            min_support_height: 0.2,
+            min_observations: 2,
+            merge_iou: 0.3,
+            merge_containment: 0.6,
+            merge_margin: 0.03,
+            association: AssociationConfig::default(),
+            sopm: SopmConfig::default(),
+            grid: GridConfig::default(),
+        }
+    }
+}
+
+/// `[mapper.association]` section.
+#[derive(Debug, Clone, PartialEq, Deserialize)]
+#[serde(deny_unknown_fields, default)]
+pub struct AssociationConfig {
+    /// Significance level α: accept when p > α (eq. 19).
+    pub alpha: f64,
+    /// Points of each cloud entering the rank-sum test (deterministic even subsample).
+    pub max_test_points: u32,
+    /// Minimum visible reference points for the test; below, the overlap gate decides.
+    pub min_reference: u32,
+    /// Growth of the cuboid / bounding box for the 3D overlap gate, metres.
+    pub gate_margin: f32,
+    /// A reference point counts as visible unless it lies this far behind the observed depth, m.
+    pub visibility_tolerance: f32,
+    /// A reference point lying more than this in front of the observed depth is not seen by
+    /// the current view either (it projects onto a surface behind it: a grazing side or
+    /// another object), m.
+    pub front_tolerance: f32,
+    /// Growth of the detection box when selecting visible reference points, pixels.
+    pub bbox_margin_px: f32,
+}
+
+impl Default for AssociationConfig {
+    fn default() -> Self {
+        Self {
+            alpha: 0.05,
+            max_test_points: 70,
+            min_reference: 15,
+            gate_margin: 0.05,
+            visibility_tolerance: 0.03,
+            front_tolerance: 0.03,
+            bbox_margin_px: 4.0,
+        }
+    }
+}
+
+/// `[mapper.sopm]` section.
+#[derive(Debug, Clone, PartialEq, Deserialize)]
+#[serde(deny_unknown_fields, default)]
+pub struct SopmConfig {
+    /// `"cylinder"`, `"hemisphere"` or `"sphere"`.
+    pub shape: SopmShape,
+    /// Height (cylinder) or elevation (hemisphere, sphere) cells.
+    pub rows: u32,
+    /// Angular cells.
+    pub cols: u32,
+    /// ε_n: minimum points in a column for a valid observation.
+    pub eps_n: u32,
+    /// Occupied inverse-sensor probability.
+    pub p_occ: f32,
+    /// Free inverse-sensor probability.
+    pub p_free: f32,
+    /// Prior occupancy probability.
+    pub p_prior: f32,
+    /// ε_sopm: a foreground object is complete when H_sopm < this.
+    pub eps_sopm: f32,
+    /// A cell is observed in a frame only if `normal · direction_to_camera > visible_cos`.
+    pub visible_cos: f32,
+}
+
+impl Default for SopmConfig {
+    fn default() -> Self {
+        Self {
+            shape: SopmShape::Cylinder,
+            rows: 18,
+            cols: 18,
+            eps_n: 5,
+            p_occ: 0.6,
+            p_free: 0.4,
+            p_prior: 0.5,
+            eps_sopm: 0.42,
+            visible_cos: 0.2,
+        }
+    }
+}
+
+impl SopmConfig {
+    /// The inverse-sensor-model parameters.
+    pub fn params(&self) -> SopmParams {
+        SopmParams {
+            shape: self.shape,
+            rows: self.rows as usize,
+            cols: self.cols as usize,
+            eps_n: self.eps_n,
+            p_occ: self.p_occ,
+            p_free: self.p_free,
+            p_prior: self.p_prior,
+            visible_cos: self.visible_cos,
+        }
+    }
+}
+
+impl MapperConfig {
+    /// Range-check.
+    pub fn validate(&self, c: &Checker) -> Result<(), ConfigError> {
+        c.count("mapper.pixel_stride", self.pixel_stride as usize, 1, 32)?;
+        c.count(
+            "mapper.max_points_per_detection",
+            self.max_points_per_detection as usize,
+            10,
+            1_000_000,
+        )?;
+        c.count("mapper.min_points", self.min_points as usize, 3, 100_000)?;
+        c.in_range("mapper.floor_margin", self.floor_margin.into(), 0.0, 1.0)?;
+        c.in_range(
+            "mapper.support_margin",
+            self.support_margin.into(),
+            0.0,
+            0.2,
+        )?;
+        c.in_range("mapper.gap_min", self.gap_min.into(), 0.001, 1.0)?;
+        c.in_range("mapper.gap_factor", self.gap_factor.into(), 0.0, 100.0)?;
+        c.in_range("mapper.object_voxel", self.object_voxel.into(), 0.002, 0.2)?;
+        c.in_range(
+            "mapper.background_voxel",
+            self.background_voxel.into(),
+            0.002,
+            0.5,
+        )?;
+        c.count(
+            "mapper.max_object_voxels",
+            self.max_object_voxels as usize,
+            16,
+            10_000_000,
+        )?;
+        c.in_range(
+            "mapper.extent_quantile",
+            self.extent_quantile.into(),
+            0.0,
+            0.2,
+        )?;
+        c.in_range(
+            "mapper.background_extent_quantile",
+            self.background_extent_quantile.into(),
+            0.0,
+            0.2,
+        )?;
+        c.in_range(
+            "mapper.yaw_keep_tolerance",
+            self.yaw_keep_tolerance.into(),
+            0.0,
+            1.0,
+        )?;
+        c.in_range(
+            "mapper.min_support_height",
+            self.min_support_height.into(),
+            0.0,
+            3.0,
+        )?;
+        c.count(
+            "mapper.min_observations",
+            self.min_observations as usize,
+            1,
+            1000,
+        )?;
+        c.in_range("mapper.merge_iou", self.merge_iou.into(), 0.0, 1.0)?;
+        c.in_range("mapper.merge_margin", self.merge_margin.into(), 0.0, 0.5)?;
+        c.in_range(
+            "mapper.merge_containment",
+            self.merge_containment.into(),
+            0.0,
+            1.0,
+        )?;
+        let a = &self.association;
+        c.in_range("mapper.association.alpha", a.alpha, 0.0, 1.0)?;
+        c.count(
+            "mapper.association.max_test_points",
+            a.max_test_points as usize,
+            5,
+            100_000,
+        )?;
+        c.count(
+            "mapper.association.min_reference",
+            a.min_reference as usize,
+            1,
+            100_000,
+        )?;
+        c.in_range(
+            "mapper.association.gate_margin",
+            a.gate_margin.into(),
+            0.0,
+            2.0,
+        )?;
+        c.in_range(
+            "mapper.association.visibility_tolerance",
+            a.visibility_tolerance.into(),
+            0.0,
+            1.0,
+        )?;
+        c.in_range(
+            "mapper.association.front_tolerance",
+            a.front_tolerance.into(),
+            0.0,
+            100.0,
+        )?;
+        c.in_range(
+            "mapper.association.bbox_margin_px",
+            a.bbox_margin_px.into(),
+            0.0,
+            100.0,
+        )?;
+        let s = &self.sopm;
+        c.count("mapper.sopm.rows", s.rows as usize, 1, MAX_SOPM_CELLS)?;
+        c.count("mapper.sopm.cols", s.cols as usize, 3, MAX_SOPM_CELLS)?;
+        c.require(
+            (s.rows * s.cols) as usize <= MAX_SOPM_CELLS,
+            "mapper.sopm.rows",
+            s.rows,
+            &format!("rows × cols must be ≤ {MAX_SOPM_CELLS}"),
+        )?;
+        c.count("mapper.sopm.eps_n", s.eps_n as usize, 1, 100_000)?;
+        c.require(
+            s.p_occ > 0.5 && s.p_occ < 1.0,
+            "mapper.sopm.p_occ",
+            s.p_occ,
+            "must be in (0.5, 1)",
+        )?;
+        c.require(
+            s.p_free > 0.0 && s.p_free < 0.5,
+            "mapper.sopm.p_free",
+            s.p_free,
+            "must be in (0, 0.5)",
+        )?;
+        c.require(
+            s.p_prior > 0.0 && s.p_prior < 1.0,
+            "mapper.sopm.p_prior",
+            s.p_prior,
+            "must be in (0, 1)",
+        )?;
+        c.in_range("mapper.sopm.eps_sopm", s.eps_sopm.into(), 0.0, 1.0)?;
+        c.in_range("mapper.sopm.visible_cos", s.visible_cos.into(), -1.0, 1.0)?;
+        self.grid.validate(c)
+    }
+}
+
+/// `[mapper.grid]` section.
+#[derive(Debug, Clone, PartialEq, Deserialize)]
+#[serde(deny_unknown_fields, default)]
+pub struct GridConfig {
+    /// Build the grid at all.
+    pub enabled: bool,
+    /// World `[x, y]` of the corner of cell (0, 0), metres.
+    pub origin: [f32; 2],
+    /// Cell edge, metres.
+    pub resolution: f32,
+    /// Cells along x.
+    pub width: u32,
+    /// Cells along y.
+    pub height: u32,
+    /// Lowest obstacle height, metres.
+    pub min_z: f32,
+    /// Highest obstacle height, metres.
+    pub max_z: f32,
+    /// Pixel stride of the rays.
+    pub stride: u32,
+    /// Longest horizontal ray, metres.
+    pub max_range: f32,
+}
+
+impl Default for GridConfig {
+    fn default() -> Self {
+        Self {
+            enabled: true,
+            origin: [-6.4, -6.4],
+            resolution: 0.05,
+            width: 256,
+            height: 256,
+            min_z: 0.1,
+            max_z: 1.8,
+            stride: 8,
+            max_range: 4.0,
+        }
+    }
+}
+
+impl GridConfig {
+    /// Range-check.
+    pub fn validate(&self, c: &Checker) -> Result<(), ConfigError> {
+        c.in_range("mapper.grid.origin[0]", self.origin[0].into(), -1e4, 1e4)?;
+        c.in_range("mapper.grid.origin[1]", self.origin[1].into(), -1e4, 1e4)?;
+        c.in_range("mapper.grid.resolution", self.resolution.into(), 0.01, 1.0)?;
+        c.count("mapper.grid.width", self.width as usize, 1, MAX_GRID_CELLS)?;
+        c.count(
+            "mapper.grid.height",
+            self.height as usize,
+            1,
+            MAX_GRID_CELLS,
+        )?;
+        c.require(
+            self.width as usize * self.height as usize <= MAX_GRID_CELLS,
+            "mapper.grid.height",
+            self.height,
+            &format!("width × height must be ≤ {MAX_GRID_CELLS}"),
+        )?;
+        c.in_range("mapper.grid.min_z", self.min_z.into(), 0.0, 5.0)?;
+        c.require(
+            self.max_z > self.min_z && self.max_z <= 10.0,
+            "mapper.grid.max_z",
+            self.max_z,
+            "must be > mapper.grid.min_z and ≤ 10",
+        )?;
+        c.count("mapper.grid.stride", self.stride as usize, 1, 64)?;
+        c.in_range("mapper.grid.max_range", self.max_range.into(), 0.1, 50.0)
+    }
+}
