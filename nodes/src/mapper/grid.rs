@@ -13,7 +13,7 @@ use shm_types::{DepthFrame, MAX_GRID_CELLS, OccupancyGrid, grid_cell};
 
 /// `[mapper.grid]` section.
 #[derive(Debug, Clone, PartialEq, Deserialize)]
-#[serde(deny_unknown_fields, default)]
+#[serde(deny_unknown_fields)]
 pub struct GridConfig {
     /// Build the grid at all.
     pub enabled: bool,
@@ -36,18 +36,9 @@ pub struct GridConfig {
 }
 
 impl Default for GridConfig {
+    /// The `[mapper.grid]` section of the built-in `config/default.toml`.
     fn default() -> Self {
-        Self {
-            enabled: true,
-            origin: [-6.4, -6.4],
-            resolution: 0.05,
-            width: 256,
-            height: 256,
-            min_z: 0.1,
-            max_z: 1.8,
-            stride: 8,
-            max_range: 4.0,
-        }
+        runtime::config::DEFAULTS.section("mapper.grid")
     }
 }
 

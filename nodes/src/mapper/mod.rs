@@ -46,7 +46,7 @@ use wilcoxon::RankScratch;
 
 /// `[mapper]` section.
 #[derive(Debug, Clone, PartialEq, Deserialize)]
-#[serde(deny_unknown_fields, default)]
+#[serde(deny_unknown_fields)]
 pub struct MapperConfig {
     /// Minimum pixel stride when back-projecting a detection's mask.
     pub pixel_stride: u32,
@@ -97,36 +97,15 @@ pub struct MapperConfig {
 }
 
 impl Default for MapperConfig {
+    /// The `[mapper]` section of the built-in `config/default.toml`.
     fn default() -> Self {
-        Self {
-            pixel_stride: 2,
-            max_points_per_detection: 3000,
-            min_points: 30,
-            floor_margin: 0.03,
-            support_margin: 0.015,
-            gap_min: 0.03,
-            gap_factor: 4.0,
-            object_voxel: 0.01,
-            background_voxel: 0.03,
-            max_object_voxels: 20000,
-            extent_quantile: 0.05,
-            background_extent_quantile: 0.01,
-            yaw_keep_tolerance: 0.03,
-            min_support_height: 0.2,
-            min_observations: 2,
-            merge_iou: 0.3,
-            merge_containment: 0.6,
-            merge_margin: 0.03,
-            association: AssociationConfig::default(),
-            sopm: SopmConfig::default(),
-            grid: GridConfig::default(),
-        }
+        runtime::config::DEFAULTS.section("mapper")
     }
 }
 
 /// `[mapper.association]` section.
 #[derive(Debug, Clone, PartialEq, Deserialize)]
-#[serde(deny_unknown_fields, default)]
+#[serde(deny_unknown_fields)]
 pub struct AssociationConfig {
     /// Significance level α: accept when p > α (eq. 19).
     pub alpha: f64,
@@ -147,22 +126,15 @@ pub struct AssociationConfig {
 }
 
 impl Default for AssociationConfig {
+    /// The `[mapper.association]` section of the built-in `config/default.toml`.
     fn default() -> Self {
-        Self {
-            alpha: 0.05,
-            max_test_points: 70,
-            min_reference: 15,
-            gate_margin: 0.05,
-            visibility_tolerance: 0.03,
-            front_tolerance: 0.03,
-            bbox_margin_px: 4.0,
-        }
+        runtime::config::DEFAULTS.section("mapper.association")
     }
 }
 
 /// `[mapper.sopm]` section.
 #[derive(Debug, Clone, PartialEq, Deserialize)]
-#[serde(deny_unknown_fields, default)]
+#[serde(deny_unknown_fields)]
 pub struct SopmConfig {
     /// `"cylinder"`, `"hemisphere"` or `"sphere"`.
     pub shape: SopmShape,
@@ -185,18 +157,9 @@ pub struct SopmConfig {
 }
 
 impl Default for SopmConfig {
+    /// The `[mapper.sopm]` section of the built-in `config/default.toml`.
     fn default() -> Self {
-        Self {
-            shape: SopmShape::Cylinder,
-            rows: 18,
-            cols: 18,
-            eps_n: 5,
-            p_occ: 0.6,
-            p_free: 0.4,
-            p_prior: 0.5,
-            eps_sopm: 0.42,
-            visible_cos: 0.2,
-        }
+        runtime::config::DEFAULTS.section("mapper.sopm")
     }
 }
 
@@ -1018,14 +981,6 @@ fn voxel_centroids(
 mod tests {
     use super::*;
     use std::path::Path;
-
-    #[test]
-    fn shipped_defaults_equal_struct_defaults() {
-        assert_eq!(
-            crate::config::Config::builtin().mapper,
-            MapperConfig::default()
-        );
-    }
 
     #[test]
     fn bad_mapper_values_name_the_key() {
