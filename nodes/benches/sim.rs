@@ -9,7 +9,7 @@
 
 use criterion::{Criterion, Throughput, criterion_group, criterion_main};
 use nodes::config::Config;
-use nodes::sim::{DepthCamera, RenderBuffers, Scene, Sim, World};
+use nodes::sim::{DepthCamera, RenderBuffers, Scene, Sim, SimPool, World};
 use shm_types::{DepthFrame, Detections, NeckGoal, boxed_zeroed};
 use std::hint::black_box;
 
@@ -22,6 +22,7 @@ fn bench_render(c: &mut Criterion) {
     assert_eq!((cfg.camera.width, cfg.camera.height), (640, 480));
     let scene = Scene::builtin("paper-scene-3").expect("built-in scene");
     let mut sim = Sim::new(scene.clone(), &cfg, 1).expect("sim");
+    sim.set_pool(SimPool::new(2).expect("sim pool"));
     // Look between the desk and the cafe table so that most objects are in view.
     sim.set_neck_goal(&NeckGoal {
         yaw: -0.25,
@@ -36,7 +37,7 @@ fn bench_render(c: &mut Criterion) {
     g.throughput(Throughput::Elements(1));
     g.sample_size(40);
     g.bench_function("sim_render_full", |b| {
-        b.iter(|| pool.install(|| sim.render(&mut frame, &mut dets, 0)))
+        b.iter(|| sim.render(&mut frame, &mut dets, 0))
     });
     let world = World::new(&scene);
     let cam = DepthCamera::new(&cfg.camera, &cfg.sim, 1);

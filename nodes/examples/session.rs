@@ -1,3 +1,10 @@
+//! One lockstep session, printed: progress, the summary and the first lines of its metrics;
+//! outputs go to `/tmp/sess-<scene>-<planner>-<seed>/`.
+//!
+//! `cargo run --release -p nodes --example session -- [SCENE [PLANNER [SEED [WIDTH [HZ [MAX_SIM_S]]]]]]`
+//! (defaults: paper-scene-1 vpsom 1 320 10 600). A smoke run of a few seconds (CI):
+//! `cargo run --release -p nodes --example session -- paper-scene-1 vpsom 1 160 5 20`.
+
 use nodes::app::lockstep::{self, SessionSpec};
 use nodes::config::Config;
 use nodes::sim::Scene;
@@ -8,6 +15,7 @@ fn main() -> anyhow::Result<()> {
     let seed: u64 = args.get(3).map_or(1, |s| s.parse().unwrap());
     let w: u32 = args.get(4).map_or(320, |s| s.parse().unwrap());
     let hz: f64 = args.get(5).map_or(10.0, |s| s.parse().unwrap());
+    let max_sim_s: f64 = args.get(6).map_or(600.0, |s| s.parse().unwrap());
     let base = Config::builtin().with_camera(w, w * 3 / 4, hz);
     let config = lockstep::config_for(&base, label)?;
     let spec = SessionSpec {
@@ -15,7 +23,7 @@ fn main() -> anyhow::Result<()> {
         config,
         seed,
         label: label.into(),
-        max_sim_s: 600.0,
+        max_sim_s,
         record: None,
     };
     let t = std::time::Instant::now();

@@ -1,21 +1,24 @@
 //! The whole configuration of a session: one typed struct per `config/default.toml` section.
 //!
-//! Every section struct is `#[serde(deny_unknown_fields, default)]` with a `Default` equal to the
-//! shipped `config/default.toml`, and a `validate(&self, &Checker)` that range-checks it.
+//! Every default is stated once, in `config/default.toml` (built in as [`DEFAULT_TOML`]): a file is
+//! deep-merged over it, key by key, and the merged table is deserialised into these structs
+//! (`deny_unknown_fields`, no `#[serde(default)]`), so a file sets only the keys it changes and an
+//! unknown key is an error naming the file and the key. Each section's `Default` is its section
+//! of the built-in file ([`runtime::config::Defaults::section`]); each has a
+//! `validate(&self, &Checker)` that range-checks it.
 
 use crate::geom::{Camera, CameraMount};
 use runtime::config::{Checker, ConfigError};
 use serde::Deserialize;
 use std::path::{Path, PathBuf};
 
-/// The shipped defaults, built into the binary so it runs from any directory.
-pub const DEFAULT_TOML: &str = include_str!("../../config/default.toml");
-/// Path of the shipped defaults relative to the repository root.
-pub const DEFAULT_PATH: &str = "config/default.toml";
+/// The shipped defaults, built into the binary so it runs from any directory, and their path
+/// relative to the repository root.
+pub use runtime::config::{DEFAULT_PATH, DEFAULT_TOML};
 
 /// All sections of a configuration file.
-#[derive(Debug, Clone, Default, Deserialize)]
-#[serde(deny_unknown_fields, default)]
+#[derive(Debug, Clone, Deserialize)]
+#[serde(deny_unknown_fields)]
 pub struct Config {
     /// Depth camera and mount.
     pub camera: CameraConfig,
@@ -45,7 +48,7 @@ pub struct Config {
 
 /// The RGB-D camera (paper: Kinect v2 on the FABO robot's head).
 #[derive(Debug, Clone, Copy, PartialEq, Deserialize)]
-#[serde(deny_unknown_fields, default)]
+#[serde(deny_unknown_fields)]
 pub struct CameraConfig {
     /// Image width, pixels (≤ 640).
     pub width: u32,
@@ -64,16 +67,9 @@ pub struct CameraConfig {
 }
 
 impl Default for CameraConfig {
+    /// The `[camera]` section of the built-in `config/default.toml`.
     fn default() -> Self {
-        Self {
-            width: 640,
-            height: 480,
-            hfov_deg: 60.0,
-            vfov_deg: 46.8,
-            min_range: 0.5,
-            max_range: 5.0,
-            mount: CameraMount::default(),
-        }
+        runtime::config::DEFAULTS.section("camera")
     }
 }
 
@@ -130,7 +126,7 @@ impl CameraConfig {
 
 /// Fixed rates of the deployment host (simulated seconds).
 #[derive(Debug, Clone, Copy, PartialEq, Deserialize)]
-#[serde(deny_unknown_fields, default)]
+#[serde(deny_unknown_fields)]
 pub struct RatesConfig {
     /// Depth frames and detections, Hz (paper: 20–30).
     pub camera_hz: f64,
@@ -141,12 +137,9 @@ pub struct RatesConfig {
 }
 
 impl Default for RatesConfig {
+    /// The `[rates]` section of the built-in `config/default.toml`.
     fn default() -> Self {
-        Self {
-            camera_hz: 30.0,
-            state_hz: 50.0,
-            map_hz: 10.0,
-        }
+        runtime::config::DEFAULTS.section("rates")
     }
 }
 
@@ -160,7 +153,7 @@ impl RatesConfig {
 
 /// `[run]`: the deployment host (`vpsom run`).
 #[derive(Debug, Clone, Copy, PartialEq, Deserialize)]
-#[serde(deny_unknown_fields, default)]
+#[serde(deny_unknown_fields)]
 pub struct RunConfig {
     /// Simulated seconds per wall second (a real robot runs at 1).
     pub time_scale: f64,
@@ -185,18 +178,9 @@ pub struct RunConfig {
 }
 
 impl Default for RunConfig {
+    /// The `[run]` section of the built-in `config/default.toml`.
     fn default() -> Self {
-        Self {
-            time_scale: 2.0,
-            camera_width: 320,
-            camera_height: 240,
-            max_sim_s: 330.0,
-            max_restarts: 2,
-            stop_grace_s: 5.0,
-            mapper_priority: 70,
-            lbv_cpu: 0,
-            lbv_backup_cpu: 1,
-        }
+        runtime::config::DEFAULTS.section("run")
     }
 }
 
@@ -246,7 +230,7 @@ impl RunConfig {
 
 /// `[bench]`: the lockstep experiments (`vpsom bench`).
 #[derive(Debug, Clone, Copy, PartialEq, Deserialize)]
-#[serde(deny_unknown_fields, default)]
+#[serde(deny_unknown_fields)]
 pub struct BenchConfig {
     /// Camera width in the experiments (0 = keep `camera.width`).
     pub camera_width: u32,
@@ -263,15 +247,9 @@ pub struct BenchConfig {
 }
 
 impl Default for BenchConfig {
+    /// The `[bench]` section of the built-in `config/default.toml`.
     fn default() -> Self {
-        Self {
-            camera_width: 320,
-            camera_height: 240,
-            camera_hz: 10.0,
-            max_sim_s: 600.0,
-            seeds: 5,
-            jobs: 0,
-        }
+        runtime::config::DEFAULTS.section("bench")
     }
 }
 
@@ -296,6 +274,13 @@ impl BenchConfig {
     }
 }
 
+impl Default for Config {
+    /// The built-in `config/default.toml` ([`Config::builtin`]).
+    fn default() -> Self {
+        Self::builtin()
+    }
+}
+
 impl Config {
     /// A copy with the camera size (and rate) overridden where the override is non-zero.
     pub fn with_camera(&self, width: u32, height: u32, camera_hz: f64) -> Config {
@@ -309,9 +294,10 @@ impl Config {
         c
     }
 
-    /// Parse and validate configuration text that came from `file`.
+    /// Parse configuration text that came from `file` over the built-in defaults (keys it does
+    /// not set keep their default), and validate it.
     pub fn parse(file: &Path, text: &str) -> Result<Self, ConfigError> {
-        let cfg: Config = runtime::config::parse_toml(file, text)?;
+        let cfg: Config = runtime::config::DEFAULTS.parse(file, text)?;
         cfg.validate(file)?;
         Ok(cfg)
     }
@@ -370,10 +356,32 @@ mod tests {
     use super::*;
 
     #[test]
-    fn shipped_default_loads_and_equals_struct_defaults_for_camera_and_rates() {
-        let cfg = Config::builtin();
-        assert_eq!(cfg.camera, CameraConfig::default());
-        assert_eq!(cfg.rates, RatesConfig::default());
+    fn a_partial_file_changes_only_its_keys() {
+        let builtin = Config::builtin();
+        let cfg = Config::parse(Path::new("p.toml"), "[camera]\nwidth = 320\n").unwrap();
+        assert_eq!(cfg.camera.width, 320);
+        assert_eq!(
+            CameraConfig {
+                width: builtin.camera.width,
+                ..cfg.camera
+            },
+            builtin.camera
+        );
+        assert_eq!(cfg.rates, builtin.rates);
+        assert_eq!(cfg.executor, builtin.executor);
+        assert_eq!(
+            cfg.ports, builtin.ports,
+            "the shipped per-topic overrides stay"
+        );
+        assert_eq!(cfg.planner, builtin.planner);
+        assert_eq!(cfg.mapper, builtin.mapper);
+        assert_eq!(cfg.recorder, builtin.recorder);
+        let empty = Config::parse(Path::new("e.toml"), "").unwrap();
+        assert_eq!(format!("{empty:?}"), format!("{builtin:?}"));
+        assert_eq!(format!("{:?}", Config::default()), format!("{builtin:?}"));
+        let mount = Config::parse(Path::new("m.toml"), "[camera.mount]\nheight = 1.2\n").unwrap();
+        assert_eq!(mount.camera.mount.height, 1.2);
+        assert_eq!(mount.camera.mount.pitch_deg, builtin.camera.mount.pitch_deg);
     }
 
     #[test]
@@ -381,6 +389,11 @@ mod tests {
         let f = Path::new("bad.toml");
         let e = Config::parse(f, "[camera]\nwidht = 320\n").unwrap_err();
         assert_eq!(e.key(), "camera.widht", "{e}");
+        assert!(
+            e.to_string()
+                .starts_with("bad.toml: camera.widht: line 2: "),
+            "{e}"
+        );
         let e = Config::parse(f, "[camra]\n").unwrap_err();
         assert!(e.to_string().contains("unknown field `camra`"), "{e}");
         let e = Config::parse(f, "[camera]\nwidth = 2000\n").unwrap_err();

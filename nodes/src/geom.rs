@@ -56,12 +56,9 @@ pub struct CameraMount {
 }
 
 impl Default for CameraMount {
+    /// The `[camera.mount]` section of the built-in `config/default.toml`.
     fn default() -> Self {
-        Self {
-            height: 1.4,
-            forward_offset: 0.0,
-            pitch_deg: 28.0,
-        }
+        runtime::config::DEFAULTS.section("camera.mount")
     }
 }
 

@@ -1,7 +1,9 @@
 //! Simulator camera and detector, end to end: visibility, occlusion, determinism.
 
 use nodes::config::{CameraConfig, Config};
-use nodes::sim::{DepthCamera, Detector, DetectorConfig, RenderBuffers, Scene, Sim, World};
+use nodes::sim::{
+    DepthCamera, Detector, DetectorConfig, RenderBuffers, Scene, Sim, SimPool, World,
+};
 use shm_types::{DepthFrame, Detections, NeckGoal, Validate, boxed_zeroed, class_id};
 use std::path::Path;
 
@@ -187,11 +189,8 @@ fn partly_hidden_small_objects_are_missed_more_often() {
 fn same_seed_same_frames_different_seed_different_noise_any_thread_count() {
     let cfg = small_config();
     let run = |seed: u64, threads: usize| {
-        let pool = rayon::ThreadPoolBuilder::new()
-            .num_threads(threads)
-            .build()
-            .unwrap();
         let mut sim = Sim::new(Scene::builtin("paper-scene-2").unwrap(), &cfg, seed).unwrap();
+        sim.set_pool(SimPool::new(threads).unwrap());
         sim.set_neck_goal(&NeckGoal {
             yaw: 0.4,
             pitch: cfg.camera.mount.pitch(),
@@ -202,7 +201,8 @@ fn same_seed_same_frames_different_seed_different_noise_any_thread_count() {
         let mut out = Vec::new();
         for _ in 0..3 {
             sim.step(100_000_000);
-            pool.install(|| sim.render(&mut frame, &mut dets, sim.time_ns()));
+            let now = sim.time_ns();
+            sim.render(&mut frame, &mut dets, now);
             assert_eq!(frame.validate(), Ok(()));
             assert_eq!(dets.validate(), Ok(()));
             out.push((

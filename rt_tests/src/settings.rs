@@ -1,13 +1,20 @@
 //! `config/rt_tests.toml`: budgets and the defaults of every subcommand (flags override them).
 
-use runtime::config::{Checker, ConfigError};
+use runtime::config::{Checker, ConfigError, Defaults};
 use runtime::executor::{ExecutorConfig, SchedPolicy};
 use serde::{Deserialize, Serialize};
 use std::path::{Path, PathBuf};
 
+/// The built-in `config/rt_tests.toml`: the one statement of every default below (a file given
+/// with `--config` is merged over it, key by key).
+pub static RT_DEFAULTS: Defaults = Defaults::new(
+    "config/rt_tests.toml",
+    include_str!("../../config/rt_tests.toml"),
+);
+
 /// The whole file.
-#[derive(Debug, Clone, Default, Serialize, Deserialize)]
-#[serde(deny_unknown_fields, default)]
+#[derive(Debug, Clone, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
 pub struct Settings {
     /// `[budgets]`.
     pub budgets: Budgets,
@@ -23,7 +30,7 @@ pub struct Settings {
 
 /// `[budgets]`: limits checked by `--check`.
 #[derive(Debug, Clone, Serialize, Deserialize)]
-#[serde(deny_unknown_fields, default)]
+#[serde(deny_unknown_fields)]
 pub struct Budgets {
     /// Wake-up lateness p99 of every executor thread, µs.
     pub wakeup_p99_us: f64,
@@ -44,23 +51,15 @@ pub struct Budgets {
 }
 
 impl Default for Budgets {
+    /// The `[budgets]` section of the built-in `config/rt_tests.toml`.
     fn default() -> Self {
-        Self {
-            wakeup_p99_us: 200.0,
-            wakeup_vs_cyclictest: 1.2,
-            ipc_p99_us: 1000.0,
-            ipc_overhead_p50: 1.3,
-            ipc_flatness: 0.2,
-            lbv_exec_p99_ms: 5.0,
-            lbv_deadline_misses: 0,
-            e2e_p99_ms: 100.0,
-        }
+        RT_DEFAULTS.section("budgets")
     }
 }
 
 /// Scheduling of a measuring thread.
 #[derive(Debug, Clone, Serialize, Deserialize)]
-#[serde(deny_unknown_fields, default)]
+#[serde(deny_unknown_fields)]
 pub struct Sched {
     /// `"fifo"` or `"other"`.
     pub policy: String,
@@ -73,13 +72,10 @@ pub struct Sched {
 }
 
 impl Default for Sched {
+    /// The `[wakeup.sched]` section of the built-in `config/rt_tests.toml` (the harness's
+    /// default scheduling; `[ipc.sched]` states its own).
     fn default() -> Self {
-        Self {
-            policy: "fifo".into(),
-            priority: 80,
-            cpus: Vec::new(),
-            mlockall: true,
-        }
+        RT_DEFAULTS.section("wakeup.sched")
     }
 }
 
@@ -123,7 +119,7 @@ impl Sched {
 
 /// `[wakeup]`.
 #[derive(Debug, Clone, Serialize, Deserialize)]
-#[serde(deny_unknown_fields, default)]
+#[serde(deny_unknown_fields)]
 pub struct WakeupSettings {
     /// Periodic threads.
     pub threads: usize,
@@ -142,22 +138,15 @@ pub struct WakeupSettings {
 }
 
 impl Default for WakeupSettings {
+    /// The `[wakeup]` section of the built-in `config/rt_tests.toml`.
     fn default() -> Self {
-        Self {
-            threads: 2,
-            period_us: 1000,
-            distance_us: 500,
-            duration_s: 10.0,
-            spin_margin_us: 0,
-            hist_max_us: 10_000,
-            sched: Sched::default(),
-        }
+        RT_DEFAULTS.section("wakeup")
     }
 }
 
 /// `[ipc]`.
 #[derive(Debug, Clone, Serialize, Deserialize)]
-#[serde(deny_unknown_fields, default)]
+#[serde(deny_unknown_fields)]
 pub struct IpcSettings {
     /// Payloads: any of `"64B"`, `"8KiB"`, `"600KiB"`, `"4MiB"`.
     pub payloads: Vec<String>,
@@ -187,24 +176,9 @@ pub struct IpcSettings {
 }
 
 impl Default for IpcSettings {
+    /// The `[ipc]` section of the built-in `config/rt_tests.toml`.
     fn default() -> Self {
-        Self {
-            payloads: PAYLOADS.iter().map(|s| s.to_string()).collect(),
-            modes: vec!["poll".into(), "event".into()],
-            rates_hz: vec![30.0, 0.0],
-            fills: vec!["reuse".into()],
-            paced_duration_s: 10.0,
-            flat_messages: 3000,
-            rounds: 5,
-            warmup_messages: 10,
-            subscriber_buffer: 4,
-            raw: true,
-            sched: Sched {
-                priority: 70,
-                ..Sched::default()
-            },
-            publisher_cpus: Vec::new(),
-        }
+        RT_DEFAULTS.section("ipc")
     }
 }
 
@@ -213,7 +187,7 @@ pub const PAYLOADS: [&str; 4] = ["64B", "8KiB", "600KiB", "4MiB"];
 
 /// `[e2e]`.
 #[derive(Debug, Clone, Serialize, Deserialize)]
-#[serde(deny_unknown_fields, default)]
+#[serde(deny_unknown_fields)]
 pub struct E2eSettings {
     /// Measured time, s (after the warm-up).
     pub duration_s: f64,
@@ -233,22 +207,15 @@ pub struct E2eSettings {
 }
 
 impl Default for E2eSettings {
+    /// The `[e2e]` section of the built-in `config/rt_tests.toml`.
     fn default() -> Self {
-        Self {
-            duration_s: 60.0,
-            warmup_s: 3.0,
-            time_scale: 1.0,
-            vpsom: String::new(),
-            pipeline_config: "config/default.toml".into(),
-            run_args: Vec::new(),
-            probe: true,
-        }
+        RT_DEFAULTS.section("e2e")
     }
 }
 
 /// `[stress]`.
 #[derive(Debug, Clone, Serialize, Deserialize)]
-#[serde(deny_unknown_fields, default)]
+#[serde(deny_unknown_fields)]
 pub struct StressSettings {
     /// CPU busy-loop workers; 0 = one per online CPU.
     pub cpu_workers: usize,
@@ -259,17 +226,21 @@ pub struct StressSettings {
 }
 
 impl Default for StressSettings {
+    /// The `[stress]` section of the built-in `config/rt_tests.toml`.
     fn default() -> Self {
-        Self {
-            cpu_workers: 0,
-            memory_mb: 256,
-            use_stress_ng: true,
-        }
+        RT_DEFAULTS.section("stress")
+    }
+}
+
+impl Default for Settings {
+    /// The built-in `config/rt_tests.toml`.
+    fn default() -> Self {
+        RT_DEFAULTS.section("")
     }
 }
 
 impl Settings {
-    /// Load `file`, or the built-in defaults when `file` is `None` and `config/rt_tests.toml`
+    /// Load `file` (merged over the built-in defaults), or the built-in defaults when `file` is `None` and `config/rt_tests.toml`
     /// does not exist.
     pub fn load(file: Option<&Path>) -> Result<(Self, Option<PathBuf>), ConfigError> {
         let path = match file {
@@ -280,7 +251,7 @@ impl Settings {
             }
         };
         let s = match &path {
-            Some(p) => runtime::config::load_toml::<Self>(p)?,
+            Some(p) => RT_DEFAULTS.load::<Self>(p)?,
             None => Self::default(),
         };
         s.validate(&Checker::new(
@@ -387,13 +358,25 @@ mod tests {
     use super::*;
 
     #[test]
-    fn shipped_file_equals_the_defaults_and_bad_values_name_the_key() {
+    fn shipped_file_loads_partial_files_merge_and_bad_values_name_the_key() {
         let path = Path::new(env!("CARGO_MANIFEST_DIR")).join("../config/rt_tests.toml");
-        let shipped: Settings = runtime::config::load_toml(&path).unwrap();
-        shipped.validate(&Checker::new(&path)).unwrap();
-        assert_eq!(
-            serde_json::to_value(&shipped).unwrap(),
-            serde_json::to_value(Settings::default()).unwrap()
+        let (shipped, _) = Settings::load(Some(&path)).unwrap();
+        assert_eq!(shipped.ipc.sched.priority, 70);
+        assert_eq!(Sched::default().priority, shipped.wakeup.sched.priority);
+        let f = Path::new("x.toml");
+        let partial: Settings = RT_DEFAULTS
+            .parse(f, "[ipc.sched]\npriority = 60\n")
+            .unwrap();
+        assert_eq!(partial.ipc.sched.priority, 60);
+        assert_eq!(partial.ipc.sched.policy, "fifo");
+        assert_eq!(partial.wakeup.period_us, shipped.wakeup.period_us);
+        let e = RT_DEFAULTS
+            .parse::<Settings>(f, "[wakeup]\nperiod = 3\n")
+            .unwrap_err();
+        assert_eq!(e.key(), "wakeup.period", "{e}");
+        assert!(
+            e.to_string().starts_with("x.toml: wakeup.period: line 2"),
+            "{e}"
         );
         let mut bad = Settings::default();
         bad.ipc.payloads.push("3MiB".into());

@@ -24,8 +24,8 @@ fn header(seq: u64, t: Duration) -> Header {
     }
 }
 
-/// `--seconds S` (default 10) and `--out PATH` from the command line.
-fn args() -> Result<(f64, String), String> {
+/// `--seconds S` (default 10) and `--out PATH` from the command line; `None` for `--help`.
+fn args() -> Result<Option<(f64, String)>, String> {
     let mut secs = 10.0;
     let mut out = std::env::temp_dir()
         .join("vpsom-recorder-load.mcap")
@@ -44,16 +44,18 @@ fn args() -> Result<(f64, String), String> {
             "--out" => out = args.next().ok_or("--out needs a path")?,
             "-h" | "--help" => {
                 println!("usage: recorder_load [--seconds S] [--out OUT.mcap]");
-                std::process::exit(0);
+                return Ok(None);
             }
             other => return Err(format!("unknown argument {other:?} (try --help)")),
         }
     }
-    Ok((secs, out))
+    Ok(Some((secs, out)))
 }
 
 fn main() -> Result<(), Box<dyn std::error::Error>> {
-    let (secs, out) = args()?;
+    let Some((secs, out)) = args()? else {
+        return Ok(());
+    };
     let cfg = RecorderConfig::default();
     let rec = Recorder::create(out.as_ref(), &cfg, RecorderSetup::default())?;
     let h = rec.handle();

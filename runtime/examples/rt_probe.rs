@@ -14,8 +14,8 @@ use runtime::ports::{PortContext, PortsConfig, Stamp};
 use shm_types::DepthFrame;
 use std::time::{Duration, Instant};
 
-/// `--seconds S` (default 2) from the command line.
-fn seconds() -> Result<f64, String> {
+/// `--seconds S` (default 2) from the command line; `None` for `--help`.
+fn seconds() -> Result<Option<f64>, String> {
     let mut secs = 2.0;
     let mut args = std::env::args().skip(1);
     while let Some(a) = args.next() {
@@ -29,16 +29,19 @@ fn seconds() -> Result<f64, String> {
             }
             "-h" | "--help" => {
                 println!("usage: rt_probe [--seconds S]   (each executor run: S s at 1 kHz)");
-                std::process::exit(0);
+                return Ok(None);
             }
             other => return Err(format!("unknown argument {other:?} (try --help)")),
         }
     }
-    Ok(secs)
+    Ok(Some(secs))
 }
 
 fn main() -> Result<(), Box<dyn std::error::Error>> {
-    let cycles = ((seconds()? * 1000.0).round() as u64).max(1);
+    let Some(secs) = seconds()? else {
+        return Ok(());
+    };
+    let cycles = ((secs * 1000.0).round() as u64).max(1);
     for margin_us in [0u64, 200] {
         let cfg = ExecutorConfig {
             spin_margin_us: margin_us,

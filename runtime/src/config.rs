@@ -1,9 +1,18 @@
 //! Typed configuration loading: TOML files deserialised into structs with `deny_unknown_fields`,
 //! then range-checked. Every error names the file, the key and the offending value.
+//!
+//! # Files
+//! | file | content |
+//! |---|---|
+//! | `config.rs` | [`ConfigError`], [`Checker`] (range checks), [`parse_toml`] / [`load_toml`] |
+//! | `config/defaults.rs` | [`Defaults`]: a built-in complete file ([`DEFAULTS`] = `config/default.toml`) that states every default once; user files merge over it |
 
 use serde::de::DeserializeOwned;
 use std::fmt;
 use std::path::{Path, PathBuf};
+
+mod defaults;
+pub use defaults::{DEFAULT_PATH, DEFAULT_TOML, DEFAULTS, Defaults, merge_tables};
 
 /// Why a configuration file was refused.
 #[derive(Debug, thiserror::Error)]

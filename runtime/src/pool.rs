@@ -40,7 +40,7 @@ pub enum PoolPriority {
 
 /// `[executor.pool]` section.
 #[derive(Debug, Clone, PartialEq, Eq, Deserialize)]
-#[serde(deny_unknown_fields, default)]
+#[serde(deny_unknown_fields)]
 pub struct PoolConfig {
     /// Worker threads (0 = one per CPU).
     pub threads: usize,
@@ -53,13 +53,9 @@ pub struct PoolConfig {
 }
 
 impl Default for PoolConfig {
+    /// The `[executor.pool]` section of the built-in `config/default.toml`.
     fn default() -> Self {
-        Self {
-            threads: 0,
-            queue: 16,
-            priority: PoolPriority::Idle,
-            nice: 19,
-        }
+        crate::config::DEFAULTS.section("executor.pool")
     }
 }
 

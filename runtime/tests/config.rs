@@ -1,7 +1,7 @@
-//! `[executor]`, `[executor.pool]` and `[ports]`: the shipped defaults load and equal the struct
-//! defaults; each bad value gives its specific error naming the key.
+//! `[executor]`, `[executor.pool]` and `[ports]`: the shipped defaults load (they are the structs'
+//! defaults), a file merges over them; each bad value gives its specific error naming the key.
 
-use runtime::config::{Checker, ConfigError, parse_toml};
+use runtime::config::{Checker, ConfigError, DEFAULTS};
 use runtime::executor::{ExecutorConfig, MissPolicy, SchedPolicy};
 use runtime::ports::{Overflow, PortsConfig};
 use serde::Deserialize;
@@ -12,15 +12,13 @@ const SHIPPED: &str = include_str!("../../config/default.toml");
 /// Only the sections owned by the runtime (other sections are ignored here).
 #[derive(Debug, Deserialize)]
 struct Root {
-    #[serde(default)]
     executor: ExecutorConfig,
-    #[serde(default)]
     ports: PortsConfig,
 }
 
 fn load(text: &str) -> Result<Root, ConfigError> {
     let file = Path::new("test.toml");
-    let root: Root = parse_toml(file, text)?;
+    let root: Root = DEFAULTS.parse(file, text)?;
     let c = Checker::new(file);
     root.executor.validate(&c)?;
     root.ports.validate(&c)?;
@@ -28,15 +26,11 @@ fn load(text: &str) -> Result<Root, ConfigError> {
 }
 
 #[test]
-fn shipped_defaults_load_and_equal_the_struct_defaults() {
+fn shipped_defaults_load() {
     let root = load(SHIPPED).unwrap();
     assert_eq!(root.executor, ExecutorConfig::default());
-    // The shipped file adds per-topic overrides for the application's topics (the runtime does
-    // not know topic names); everything else equals the struct defaults.
-    let mut ports = root.ports.clone();
-    assert!(!ports.topics.is_empty());
-    ports.topics.clear();
-    assert_eq!(ports, PortsConfig::default());
+    assert_eq!(root.ports, PortsConfig::default());
+    assert!(!root.ports.topics.is_empty());
     assert_eq!(root.ports.topic("sim/truth").subscriber_buffer, 256);
     assert_eq!(root.executor.policy, SchedPolicy::Fifo);
     assert_eq!(root.executor.miss_policy, MissPolicy::Skip);
@@ -48,12 +42,17 @@ fn shipped_defaults_load_and_equal_the_struct_defaults() {
 
 #[test]
 fn per_topic_overrides_merge_with_the_defaults() {
-    let root = load("[ports]\nsubscriber_buffer = 3\n[ports.topics.depth]\noverflow = \"block\"\n")
+    let root = load("[ports]\nsubscriber_buffer = 3\n[ports.topics.lidar]\noverflow = \"block\"\n")
         .unwrap();
+    let lidar = root.ports.topic("lidar");
+    assert_eq!(lidar.overflow, Overflow::Block);
+    assert_eq!(lidar.subscriber_buffer, 3);
+    assert_eq!(root.ports.topic("map").overflow, Overflow::Overwrite);
+    // A file's topic table merges with the shipped one of the same topic.
+    let root = load("[ports.topics.depth]\noverflow = \"block\"\n").unwrap();
     let depth = root.ports.topic("depth");
     assert_eq!(depth.overflow, Overflow::Block);
-    assert_eq!(depth.subscriber_buffer, 3);
-    assert_eq!(root.ports.topic("map").overflow, Overflow::Overwrite);
+    assert_eq!(depth.subscriber_buffer, 4);
 }
 
 fn range_key(text: &str) -> String {

@@ -18,6 +18,12 @@
 //! [`AnyBitPattern`], which lets a producer that overwrites every field it publishes skip that
 //! fill ([`init_reused`]).
 
+// The workspace denies unsafe code; this crate is where it is the point: `ZeroCopySend`,
+// `ZeroValid` and `AnyBitPattern` are unsafe traits about the bytes of `#[repr(C)]` types, and
+// in-place initialisation writes through raw pointers. Every unsafe block still carries a
+// `// SAFETY:` comment (`clippy::undocumented_unsafe_blocks`, from the workspace lints).
+#![allow(unsafe_code)]
+
 mod classes;
 mod message;
 mod messages;

@@ -8,7 +8,7 @@ use shm_types::{MAX_GRID_CELLS, MAX_SOPM_CELLS};
 
 /// `[mapper]` section.
 #[derive(Debug, Clone, PartialEq, Deserialize)]
-#[serde(deny_unknown_fields, default)]
+#[serde(deny_unknown_fields)]
 pub struct MapperConfig {
     /// Minimum pixel stride when back-projecting a detection's mask.
     pub pixel_stride: u32,
@@ -59,36 +59,15 @@ pub struct MapperConfig {
 }
 
 impl Default for MapperConfig {
+    /// The `[mapper]` section of the built-in `config/default.toml`.
     fn default() -> Self {
-        Self {
-            pixel_stride: 2,
-            max_points_per_detection: 3000,
-            min_points: 30,
-            floor_margin: 0.03,
-            support_margin: 0.015,
-            gap_min: 0.03,
-            gap_factor: 4.0,
-            object_voxel: 0.01,
-            background_voxel: 0.03,
-            max_object_voxels: 20000,
-            extent_quantile: 0.05,
-            background_extent_quantile: 0.01,
-            yaw_keep_tolerance: 0.03,
-            min_support_height: 0.2,
-            min_observations: 2,
-            merge_iou: 0.3,
-            merge_containment: 0.6,
-            merge_margin: 0.03,
-            association: AssociationConfig::default(),
-            sopm: SopmConfig::default(),
-            grid: GridConfig::default(),
-        }
+        runtime::config::DEFAULTS.section("mapper")
     }
 }
 
 /// `[mapper.association]` section.
 #[derive(Debug, Clone, PartialEq, Deserialize)]
-#[serde(deny_unknown_fields, default)]
+#[serde(deny_unknown_fields)]
 pub struct AssociationConfig {
     /// Significance level α: accept when p > α (eq. 19).
     pub alpha: f64,
@@ -109,22 +88,15 @@ pub struct AssociationConfig {
 }
 
 impl Default for AssociationConfig {
+    /// The `[mapper.association]` section of the built-in `config/default.toml`.
     fn default() -> Self {
-        Self {
-            alpha: 0.05,
-            max_test_points: 70,
-            min_reference: 15,
-            gate_margin: 0.05,
-            visibility_tolerance: 0.03,
-            front_tolerance: 0.03,
-            bbox_margin_px: 4.0,
-        }
+        runtime::config::DEFAULTS.section("mapper.association")
     }
 }
 
 /// `[mapper.sopm]` section.
 #[derive(Debug, Clone, PartialEq, Deserialize)]
-#[serde(deny_unknown_fields, default)]
+#[serde(deny_unknown_fields)]
 pub struct SopmConfig {
     /// `"cylinder"`, `"hemisphere"` or `"sphere"`.
     pub shape: SopmShape,
@@ -147,18 +119,9 @@ pub struct SopmConfig {
 }
 
 impl Default for SopmConfig {
+    /// The `[mapper.sopm]` section of the built-in `config/default.toml`.
     fn default() -> Self {
-        Self {
-            shape: SopmShape::Cylinder,
-            rows: 18,
-            cols: 18,
-            eps_n: 5,
-            p_occ: 0.6,
-            p_free: 0.4,
-            p_prior: 0.5,
-            eps_sopm: 0.42,
-            visible_cos: 0.2,
-        }
+        runtime::config::DEFAULTS.section("mapper.sopm")
     }
 }
 
@@ -323,7 +286,7 @@ impl MapperConfig {
 
 /// `[mapper.grid]` section.
 #[derive(Debug, Clone, PartialEq, Deserialize)]
-#[serde(deny_unknown_fields, default)]
+#[serde(deny_unknown_fields)]
 pub struct GridConfig {
     /// Build the grid at all.
     pub enabled: bool,
@@ -346,18 +309,9 @@ pub struct GridConfig {
 }
 
 impl Default for GridConfig {
+    /// The `[mapper.grid]` section of the built-in `config/default.toml`.
     fn default() -> Self {
-        Self {
-            enabled: true,
-            origin: [-6.4, -6.4],
-            resolution: 0.05,
-            width: 256,
-            height: 256,
-            min_z: 0.1,
-            max_z: 1.8,
-            stride: 8,
-            max_range: 4.0,
-        }
+        runtime::config::DEFAULTS.section("mapper.grid")
     }
 }
 

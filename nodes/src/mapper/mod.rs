@@ -718,14 +718,6 @@ mod tests {
     use std::path::Path;
 
     #[test]
-    fn shipped_defaults_equal_struct_defaults() {
-        assert_eq!(
-            crate::config::Config::builtin().mapper,
-            MapperConfig::default()
-        );
-    }
-
-    #[test]
     fn bad_mapper_values_name_the_key() {
         let f = Path::new("bad.toml");
         let e =

@@ -30,11 +30,10 @@ use serde::Deserialize;
 use shm_types::sopm_shape;
 
 /// Shape of the map (paper Figure 3b–d).
-#[derive(Debug, Clone, Copy, PartialEq, Eq, Deserialize, Default)]
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Deserialize)]
 #[serde(rename_all = "lowercase")]
 pub enum SopmShape {
     /// Cylinder around the vertical axis through the cuboid centre; rows split the height.
-    #[default]
     Cylinder,
     /// Upper hemisphere centred on the cuboid's bottom centre; rows split elevation 0..90°.
     Hemisphere,

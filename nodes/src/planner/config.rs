@@ -1,4 +1,4 @@
-//! `[planner]` configuration: one struct per nested table, defaults equal to `config/default.toml`.
+//! `[planner]` configuration: one struct per nested table, defaults from `config/default.toml`.
 
 use runtime::config::{Checker, ConfigError};
 use serde::Deserialize;
@@ -6,11 +6,10 @@ use std::fmt;
 use std::str::FromStr;
 
 /// Which view planner drives the robot (`--planner vpsom|coverage|frontier`).
-#[derive(Debug, Clone, Copy, PartialEq, Eq, Default, Deserialize)]
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Deserialize)]
 #[serde(rename_all = "lowercase")]
 pub enum PlannerKind {
     /// VP-SOM (paper sections 3–5): GBV on the chassis, LBV on the neck.
-    #[default]
     Vpsom,
     /// All-views coverage: a full circle around every cluster, camera on the cluster centre.
     Coverage,
@@ -53,12 +52,11 @@ impl FromStr for PlannerKind {
 }
 
 /// Which foreground objects count as occluders of `fo_i` in H_IoU (eq. 21).
-#[derive(Debug, Clone, Copy, PartialEq, Eq, Default, Deserialize)]
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Deserialize)]
 #[serde(rename_all = "lowercase")]
 pub enum Occluders {
     /// Every other foreground object whose box projects into the image (the paper's `Σ_{j≠i}`):
     /// two overlapping boxes penalise both objects.
-    #[default]
     All,
     /// Only objects whose centre is closer to the camera (along the optical axis) than `fo_i`'s
     /// centre: physically, only those can hide it.
@@ -68,7 +66,7 @@ pub enum Occluders {
 /// Term switches for ablation studies. A disabled multiplicative factor (cos θ_sopm, C_asso,
 /// N_cp, cos θ_c) is replaced by 1; a disabled additive term (H_sopm, H_IoU) by 0.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Deserialize)]
-#[serde(deny_unknown_fields, default)]
+#[serde(deny_unknown_fields)]
 pub struct AblationConfig {
     /// Model uncertainty H_sopm in f_a (additive).
     pub h_sopm: bool,
@@ -85,15 +83,9 @@ pub struct AblationConfig {
 }
 
 impl Default for AblationConfig {
+    /// The `[planner.ablation]` section of the built-in `config/default.toml`.
     fn default() -> Self {
-        Self {
-            h_sopm: true,
-            h_iou: true,
-            theta_sopm: true,
-            c_asso: true,
-            n_cp: true,
-            theta_c: true,
-        }
+        runtime::config::DEFAULTS.section("planner.ablation")
     }
 }
 
@@ -128,7 +120,7 @@ pub struct UnknownTerm(pub String);
 
 /// `[planner.gbv]`: global best view.
 #[derive(Debug, Clone, Copy, PartialEq, Deserialize)]
-#[serde(deny_unknown_fields, default)]
+#[serde(deny_unknown_fields)]
 pub struct GbvConfig {
     /// Candidates N sampled on a ring around the cluster.
     pub candidates: usize,
@@ -146,21 +138,15 @@ pub struct GbvConfig {
 }
 
 impl Default for GbvConfig {
+    /// The `[planner.gbv]` section of the built-in `config/default.toml`.
     fn default() -> Self {
-        Self {
-            candidates: 36,
-            alpha: 1.0,
-            beta: 0.2,
-            safe_distance: 0.6,
-            max_rounds_per_cluster: 12,
-            revisit_radius: 0.5,
-        }
+        runtime::config::DEFAULTS.section("planner.gbv")
     }
 }
 
 /// `[planner.lbv]`: local best view (neck).
 #[derive(Debug, Clone, Copy, PartialEq, Deserialize)]
-#[serde(deny_unknown_fields, default)]
+#[serde(deny_unknown_fields)]
 pub struct LbvConfig {
     /// Candidates M spread evenly over the neck range.
     pub candidates: usize,
@@ -175,21 +161,16 @@ pub struct LbvConfig {
 }
 
 impl Default for LbvConfig {
+    /// The `[planner.lbv]` section of the built-in `config/default.toml`.
     fn default() -> Self {
-        Self {
-            candidates: 18,
-            alpha: 0.0,
-            beta: 1.0,
-            neck_min_deg: -180.0,
-            neck_max_deg: 180.0,
-        }
+        runtime::config::DEFAULTS.section("planner.lbv")
     }
 }
 
 /// `[planner.bootstrap]`: behaviour before a cluster is known, and for clusters without
 /// foreground objects.
 #[derive(Debug, Clone, Copy, PartialEq, Deserialize)]
-#[serde(deny_unknown_fields, default)]
+#[serde(deny_unknown_fields)]
 pub struct BootstrapConfig {
     /// Neck stops of the in-place look-around sweep (evenly over 360°).
     pub look_around_steps: usize,
@@ -203,33 +184,30 @@ pub struct BootstrapConfig {
 }
 
 impl Default for BootstrapConfig {
+    /// The `[planner.bootstrap]` section of the built-in `config/default.toml`.
     fn default() -> Self {
-        Self {
-            look_around_steps: 6,
-            neck_tolerance_deg: 5.0,
-            sectors: 8,
-            empty_cluster_sectors: 4,
-        }
+        runtime::config::DEFAULTS.section("planner.bootstrap")
     }
 }
 
 /// `[planner.coverage]`: all-views coverage baseline.
 #[derive(Debug, Clone, Copy, PartialEq, Deserialize)]
-#[serde(deny_unknown_fields, default)]
+#[serde(deny_unknown_fields)]
 pub struct CoverageConfig {
     /// Waypoints on the full circle around each cluster.
     pub waypoints: usize,
 }
 
 impl Default for CoverageConfig {
+    /// The `[planner.coverage]` section of the built-in `config/default.toml`.
     fn default() -> Self {
-        Self { waypoints: 12 }
+        runtime::config::DEFAULTS.section("planner.coverage")
     }
 }
 
 /// `[planner.frontier]`: frontier-exploration baseline (also VP-SOM's bootstrap exploration).
 #[derive(Debug, Clone, Copy, PartialEq, Deserialize)]
-#[serde(deny_unknown_fields, default)]
+#[serde(deny_unknown_fields)]
 pub struct FrontierConfig {
     /// Frontier clusters with fewer cells are ignored (noise).
     pub min_cells: usize,
@@ -239,17 +217,15 @@ pub struct FrontierConfig {
 }
 
 impl Default for FrontierConfig {
+    /// The `[planner.frontier]` section of the built-in `config/default.toml`.
     fn default() -> Self {
-        Self {
-            min_cells: 5,
-            blacklist_radius: 0.5,
-        }
+        runtime::config::DEFAULTS.section("planner.frontier")
     }
 }
 
 /// `[planner]` section.
 #[derive(Debug, Clone, PartialEq, Deserialize)]
-#[serde(deny_unknown_fields, default)]
+#[serde(deny_unknown_fields)]
 pub struct PlannerConfig {
     /// `vpsom`, `coverage` or `frontier`.
     pub kind: PlannerKind,
@@ -288,25 +264,9 @@ pub struct PlannerConfig {
 }
 
 impl Default for PlannerConfig {
+    /// The `[planner]` section of the built-in `config/default.toml`.
     fn default() -> Self {
-        Self {
-            kind: PlannerKind::Vpsom,
-            lbv_hz: 20.0,
-            lbv_budget_ms: 5.0,
-            eps_sopm: 0.42,
-            eps_cp: 100.0,
-            theta_thresh_deg: 40.0,
-            occluders: Occluders::All,
-            robot_radius: 0.3,
-            nav_unknown_traversable: true,
-            nav_inflated: true,
-            gbv: GbvConfig::default(),
-            lbv: LbvConfig::default(),
-            bootstrap: BootstrapConfig::default(),
-            coverage: CoverageConfig::default(),
-            frontier: FrontierConfig::default(),
-            ablation: AblationConfig::default(),
-        }
+        runtime::config::DEFAULTS.section("planner")
     }
 }
 
@@ -414,11 +374,6 @@ mod tests {
     use super::*;
     use crate::config::Config;
     use std::path::Path;
-
-    #[test]
-    fn shipped_section_equals_defaults() {
-        assert_eq!(Config::builtin().planner, PlannerConfig::default());
-    }
 
     #[test]
     fn kinds_parse_and_bad_values_are_named() {

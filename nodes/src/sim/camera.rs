@@ -139,7 +139,8 @@ impl DepthCamera {
 
     /// Render `world` seen from `world_from_camera` (optical frame, the TRUE pose) into
     /// `depth_mm` (row-major, `width × height` entries, millimetres, 0 = invalid) and `buf`.
-    /// Rows run in parallel on the current rayon pool.
+    /// Rows run in parallel on the current rayon pool ([`Sim::render`](super::Sim::render)
+    /// installs the simulator's [`SimPool`](super::SimPool)).
     ///
     /// Acceleration: each object's world bounds are projected into the image once per frame
     /// (view culling; the whole image if a bound is behind the camera); each row then casts

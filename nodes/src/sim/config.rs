@@ -5,7 +5,7 @@ use serde::Deserialize;
 
 /// `[sim]` section: the world and the depth sensor's noise model.
 #[derive(Debug, Clone, PartialEq, Deserialize)]
-#[serde(deny_unknown_fields, default)]
+#[serde(deny_unknown_fields)]
 pub struct SimConfig {
     /// Scene to load: a built-in scene name (`paper-scene-1`..`3`) or a path to a scene file.
     pub scene: String,
@@ -32,20 +32,9 @@ pub struct SimConfig {
 }
 
 impl Default for SimConfig {
+    /// The `[sim]` section of the built-in `config/default.toml`.
     fn default() -> Self {
-        Self {
-            scene: "paper-scene-1".into(),
-            noise_a: 0.0012,
-            noise_b: 0.0019,
-            grazing_deg: 82.0,
-            dropout: 0.002,
-            feature_density_objects: 150.0,
-            feature_density_walls: 4.0,
-            min_tracked_features: 30,
-            max_track_rate_deg_s: 100.0,
-            failure_min_duration_s: 1.0,
-            failure_min_distance_m: 0.3,
-        }
+        runtime::config::DEFAULTS.section("sim")
     }
 }
 
@@ -98,7 +87,7 @@ impl SimConfig {
 
 /// `[detector]` section: the simulated instance-segmentation detector (YOLO stand-in).
 #[derive(Debug, Clone, PartialEq, Deserialize)]
-#[serde(deny_unknown_fields, default)]
+#[serde(deny_unknown_fields)]
 pub struct DetectorConfig {
     /// Objects with fewer visible pixels are never detected.
     pub min_pixels: u32,
@@ -127,24 +116,9 @@ pub struct DetectorConfig {
 }
 
 impl Default for DetectorConfig {
+    /// The `[detector]` section of the built-in `config/default.toml`.
     fn default() -> Self {
-        Self {
-            min_pixels: 40,
-            miss_rate: 0.03,
-            miss_small: 0.4,
-            small_pixels: 1500,
-            miss_occluded: 0.5,
-            score_mean: 0.85,
-            score_std: 0.06,
-            box_jitter_px: 1.5,
-            box_jitter_frac: 0.02,
-            mask_bleed_px: 2,
-            confusion_rate: 0.05,
-            confusion_groups: vec![
-                vec!["cup".into(), "bottle".into(), "vase".into()],
-                vec!["book".into(), "keyboard".into()],
-            ],
-        }
+        runtime::config::DEFAULTS.section("detector")
     }
 }
 
@@ -208,7 +182,7 @@ impl DetectorConfig {
 
 /// `[robot]` section: base, neck, odometry and the navigation map.
 #[derive(Debug, Clone, PartialEq, Deserialize)]
-#[serde(deny_unknown_fields, default)]
+#[serde(deny_unknown_fields)]
 pub struct RobotConfig {
     /// Base radius (obstacles are inflated by it), metres.
     pub radius: f32,
@@ -243,24 +217,9 @@ pub struct RobotConfig {
 }
 
 impl Default for RobotConfig {
+    /// The `[robot]` section of the built-in `config/default.toml`.
     fn default() -> Self {
-        Self {
-            radius: 0.3,
-            max_speed: 0.4,
-            max_turn_rate_deg_s: 45.0,
-            neck_rate_deg_s: 60.0,
-            pitch_min_deg: 28.0,
-            pitch_max_deg: 28.0,
-            goal_tolerance_m: 0.05,
-            yaw_tolerance_deg: 3.0,
-            grid_resolution: 0.05,
-            odom_trans_noise: 0.02,
-            odom_rot_noise: 0.02,
-            odom_rot_per_m: 0.01,
-            lost_drift_factor: 3.0,
-            slam_correction_rate: 2.0,
-            substep_s: 0.01,
-        }
+        runtime::config::DEFAULTS.section("robot")
     }
 }
 
@@ -337,17 +296,8 @@ impl RobotConfig {
 
 #[cfg(test)]
 mod tests {
-    use super::*;
     use crate::config::Config;
     use std::path::Path;
-
-    #[test]
-    fn shipped_sections_equal_struct_defaults() {
-        let cfg = Config::builtin();
-        assert_eq!(cfg.sim, SimConfig::default());
-        assert_eq!(cfg.detector, DetectorConfig::default());
-        assert_eq!(cfg.robot, RobotConfig::default());
-    }
 
     #[test]
     fn bad_values_name_the_key() {

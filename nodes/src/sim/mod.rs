@@ -23,6 +23,9 @@
 //! ```
 //!
 //! Ground truth ([`Sim::scene`], [`Sim::true_state`]) is for evaluation and recording only.
+//!
+//! Rendering's parallel work (depth ray casting and mask bleed, by image rows) runs on the
+//! simulator's own named thread pool, [`SimPool`], not on rayon's global pool.
 
 mod camera;
 mod config;
@@ -48,6 +51,7 @@ pub use world::{Hit, STRUCTURE, World};
 use crate::geom::{CameraMount, affine_to_pose};
 use glam::Affine3A;
 use shm_types::{DepthFrame, Detections, NavGoal, NeckGoal, OccupancyGrid, RobotState};
+use std::sync::{Arc, OnceLock};
 
 /// Fraction of the robot radius by which obstacles are inflated for the TRUE base's collision
 /// check (the planner's grid uses the full radius; the margin absorbs small drift).
@@ -66,9 +70,56 @@ pub enum SimError {
     },
 }
 
+/// The simulator's worker threads: [`Sim::render`] runs its row-parallel work (depth ray
+/// casting, mask bleed) on this pool.
+///
+/// Threads are named `sim-<i>` and run at the default priority, `SCHED_OTHER` with the nice
+/// value of the thread that builds the pool (Linux threads inherit it; `vpsom run` builds it in
+/// the sim node's executor thread, lockstep hosts at nice 0): the simulator is not real-time and
+/// must not compete with the planner's LBV thread. Frames do not depend on the number of threads
+/// (every pixel's noise comes from a per-row stream). Cloning shares the pool.
+#[derive(Debug, Clone)]
+pub struct SimPool(Arc<rayon::ThreadPool>);
+
+impl SimPool {
+    /// A pool of `threads` workers (0 = one per CPU, or `RAYON_NUM_THREADS` if set).
+    pub fn new(threads: usize) -> Result<Self, rayon::ThreadPoolBuildError> {
+        rayon::ThreadPoolBuilder::new()
+            .num_threads(threads)
+            .thread_name(|i| format!("sim-{i}"))
+            .build()
+            .map(|pool| Self(Arc::new(pool)))
+    }
+
+    /// The process's simulator pool, built on first use with one thread per CPU: every [`Sim`]
+    /// renders on it unless given another ([`Sim::set_pool`]). One pool per process, not per
+    /// `Sim`, so that hosts running many sessions at once (`vpsom bench`) keep one thread per
+    /// CPU, as rayon's global pool did.
+    ///
+    /// # Panics
+    /// If the operating system refuses to start the threads.
+    pub fn shared() -> Self {
+        static SHARED: OnceLock<SimPool> = OnceLock::new();
+        SHARED
+            .get_or_init(|| SimPool::new(0).expect("start the simulator's thread pool"))
+            .clone()
+    }
+
+    /// Run `f` on the pool: rayon's parallel iterators inside it use the pool's threads.
+    pub fn install<R: Send>(&self, f: impl FnOnce() -> R + Send) -> R {
+        self.0.install(f)
+    }
+
+    /// Worker threads.
+    pub fn threads(&self) -> usize {
+        self.0.current_num_threads()
+    }
+}
+
 /// The whole simulated robot and world, stepped deterministically for a seed.
 #[derive(Debug)]
 pub struct Sim {
+    pool: SimPool,
     scene: Scene,
     world: World,
     camera: DepthCamera,
@@ -85,8 +136,8 @@ pub struct Sim {
 
 impl Sim {
     /// A simulator of `scene` with the `[camera]`, `[sim]`, `[detector]` and `[robot]` sections
-    /// of `cfg`. Same scene, config and seed → identical frames, detections and states for the
-    /// same sequence of calls (whatever the number of rayon threads).
+    /// of `cfg`, rendering on [`SimPool::shared`]. Same scene, config and seed → identical frames,
+    /// detections and states for the same sequence of calls (whatever the number of threads).
     pub fn new(scene: Scene, cfg: &crate::config::Config, seed: u64) -> Result<Sim, SimError> {
         let grid_err = |source| SimError::Grid {
             scene: scene.name.clone(),
@@ -97,6 +148,7 @@ impl Sim {
         let collision = NavGrid::build(&scene, r.radius * COLLISION_INFLATION, r.grid_resolution)
             .map_err(grid_err)?;
         Ok(Sim {
+            pool: SimPool::shared(),
             world: World::new(&scene),
             camera: DepthCamera::new(&cfg.camera, &cfg.sim, mix(seed, &[1])),
             mount: cfg.camera.mount,
@@ -115,6 +167,16 @@ impl Sim {
             frames: 0,
             scene,
         })
+    }
+
+    /// Render on `pool` from now on (e.g. a pool with a given number of threads).
+    pub fn set_pool(&mut self, pool: SimPool) {
+        self.pool = pool;
+    }
+
+    /// The pool rendering runs on.
+    pub fn pool(&self) -> &SimPool {
+        &self.pool
     }
 
     /// Accept a chassis goal (planned with A* on the navigation grid from the estimated pose).
@@ -150,7 +212,7 @@ impl Sim {
     /// (from the ESTIMATED base pose), headers (`seq` = frame number from 1, `stamp_ns` and
     /// `sim_time_ns` = `now_ns`; a host may overwrite `stamp_ns`/`seq`, keeping
     /// `dets.frame_seq` equal to the frame's `seq`) and updates the localization model.
-    /// No heap allocation after the first call.
+    /// Runs on the sim's [`SimPool`]. No heap allocation after the first call.
     pub fn render(&mut self, frame: &mut DepthFrame, dets: &mut Detections, now_ns: u64) {
         let cam = *self.camera.camera();
         let r = &self.robot;
@@ -165,13 +227,9 @@ impl Sim {
         frame.intrinsics = cam.k;
         frame.camera_pose = affine_to_pose(&est_pose);
         frame.reserved = 0;
-        self.camera.render(
-            &self.world,
-            &true_pose,
-            self.frames,
-            frame.pixels_mut(),
-            &mut self.buf,
-        );
+        let (pool, frames) = (&self.pool, self.frames);
+        let (camera, world, buf) = (&self.camera, &self.world, &mut self.buf);
+        pool.install(|| camera.render(world, &true_pose, frames, frame.pixels_mut(), buf));
         self.loc.count_visible(&cam, &true_pose, &self.buf);
         self.loc.update(
             self.robot.camera_turn_rate,
@@ -179,8 +237,8 @@ impl Sim {
             self.time_ns,
         );
         self.robot.localized = self.loc.is_ok();
-        self.detector
-            .detect(&self.buf.instance, &cam, &true_pose, self.frames, dets);
+        let (detector, instance) = (&mut self.detector, &self.buf.instance);
+        pool.install(|| detector.detect(instance, &cam, &true_pose, frames, dets));
         dets.header = frame.header;
         dets.frame_seq = frame.header.seq;
     }

@@ -49,7 +49,7 @@ pub enum EventTrace {
 /// `[executor]` section: defaults for every periodic executor (the period comes from the node's
 /// rate), and `[executor.pool]` for the low-priority worker pool.
 #[derive(Debug, Clone, PartialEq, Deserialize)]
-#[serde(deny_unknown_fields, default)]
+#[serde(deny_unknown_fields)]
 pub struct ExecutorConfig {
     /// Requested policy.
     pub policy: SchedPolicy,
@@ -89,24 +89,9 @@ pub struct ExecutorConfig {
 }
 
 impl Default for ExecutorConfig {
+    /// The `[executor]` section of the built-in `config/default.toml`.
     fn default() -> Self {
-        Self {
-            policy: SchedPolicy::Fifo,
-            priority: 80,
-            nice: -5,
-            mlockall: true,
-            cpus: Vec::new(),
-            spin_margin_us: 200,
-            cpu_dma_latency_us: 0,
-            backup_cpu: -1,
-            backup_delay_us: 1000,
-            budget_fraction: 1.0,
-            miss_policy: MissPolicy::Skip,
-            escalate_after: 5,
-            on_escalate: EscalateAction::Report,
-            trace: EventTrace::Misses,
-            pool: PoolConfig::default(),
-        }
+        crate::config::DEFAULTS.section("executor")
     }
 }
 

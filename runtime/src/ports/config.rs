@@ -22,12 +22,13 @@ pub enum Overflow {
     Discard,
 }
 
-/// Declares every per-topic service setting once, as `field: type = built-in default`, and
-/// derives from that list [`TopicSettings`] (resolved values), [`TopicOverride`] (the same keys,
-/// each optional), [`PortsConfig`] (`namespace`, the same keys as every topic's defaults, and
-/// `topics`), `PortsConfig::default()` and the merge `PortsConfig::settings_with`.
+/// Declares every per-topic service setting once, as `field: type`, and derives from that list
+/// [`TopicSettings`] (resolved values), [`TopicOverride`] (the same keys, each optional),
+/// [`PortsConfig`] (`namespace`, the same keys as every topic's defaults, and `topics`) and the
+/// merge `PortsConfig::settings_with`. The defaults are the `[ports]` section of
+/// `config/default.toml` (`PortsConfig::default()`).
 macro_rules! topic_settings {
-    ($( $(#[doc = $doc:literal])+ $field:ident: $ty:ty = $default:expr, )+) => {
+    ($( $(#[doc = $doc:literal])+ $field:ident: $ty:ty, )+) => {
         /// Settings of one topic's services (the `[ports]` defaults merged with a per-topic
         /// override).
         #[derive(Debug, Clone, Copy, PartialEq, Eq)]
@@ -48,7 +49,7 @@ macro_rules! topic_settings {
         /// `[ports]` section: iceoryx2 service settings shared by every topic, plus per-topic
         /// overrides.
         #[derive(Debug, Clone, PartialEq, Eq, Deserialize)]
-        #[serde(deny_unknown_fields, default)]
+        #[serde(deny_unknown_fields)]
         pub struct PortsConfig {
             /// Middle part of every service name, `vpsom/<namespace>/<topic>`: runs with
             /// different namespaces never collide. `[A-Za-z0-9_-]`, 1..=48 characters.
@@ -59,16 +60,6 @@ macro_rules! topic_settings {
             )+
             /// Per-topic overrides, keyed by topic name.
             pub topics: BTreeMap<String, TopicOverride>,
-        }
-
-        impl Default for PortsConfig {
-            fn default() -> Self {
-                Self {
-                    namespace: "main".into(),
-                    $( $field: $default, )+
-                    topics: BTreeMap::new(),
-                }
-            }
         }
 
         impl PortsConfig {
@@ -84,23 +75,31 @@ macro_rules! topic_settings {
 
 topic_settings! {
     /// Samples a late-joining subscriber receives on connection.
-    history_size: usize = 0,
+    history_size: usize,
     /// Unread samples a subscriber can buffer.
-    subscriber_buffer: usize = 2,
+    subscriber_buffer: usize,
     /// Samples a subscriber can hold borrowed at once.
-    subscriber_max_borrowed: usize = 2,
+    subscriber_max_borrowed: usize,
     /// Samples a publisher can hold loaned at once.
-    publisher_max_loaned: usize = 2,
+    publisher_max_loaned: usize,
     /// Publishers per topic.
-    max_publishers: usize = 2,
+    max_publishers: usize,
     /// Subscribers per topic.
-    max_subscribers: usize = 8,
+    max_subscribers: usize,
     /// Nodes (processes) that may open the topic.
-    max_nodes: usize = 16,
+    max_nodes: usize,
     /// Full-buffer behaviour.
-    overflow: Overflow = Overflow::Overwrite,
+    overflow: Overflow,
     /// With [`Overflow::Block`]: give up after this long (ms).
-    block_timeout_ms: u64 = 1000,
+    block_timeout_ms: u64,
+}
+
+impl Default for PortsConfig {
+    /// The `[ports]` section of the built-in `config/default.toml`, with its per-topic
+    /// overrides (`[ports.topics.<topic>]`).
+    fn default() -> Self {
+        crate::config::DEFAULTS.section("ports")
+    }
 }
 
 impl PortsConfig {
