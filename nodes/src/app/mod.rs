@@ -5,7 +5,7 @@
 //! |---|---|
 //! | [`deploy`] | `vpsom run`: one process per node over iceoryx2 on the real clock, launched and watched |
 //! | [`lockstep`] | one process, one thread, simulated clock: deterministic sessions (bench, tests) |
-//! | [`bench`] | scenes × planners × seeds on the lockstep host, report and figures |
+//! | [`bench`](mod@bench) | scenes × planners × seeds on the lockstep host, report and figures |
 //! | [`topics`] | topic names of a live run |
 
 pub mod bench;
