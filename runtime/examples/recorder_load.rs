@@ -24,38 +24,20 @@ fn header(seq: u64, t: Duration) -> Header {
     }
 }
 
-/// `--seconds S` (default 10) and `--out PATH` from the command line; `None` for `--help`.
-fn args() -> Result<Option<(f64, String)>, String> {
-    let mut secs = 10.0;
-    let mut out = std::env::temp_dir()
-        .join("vpsom-recorder-load.mcap")
-        .display()
-        .to_string();
-    let mut args = std::env::args().skip(1);
-    while let Some(a) = args.next() {
-        match a.as_str() {
-            "--seconds" => {
-                secs = args
-                    .next()
-                    .and_then(|s| s.parse::<f64>().ok())
-                    .filter(|s| s.is_finite() && *s > 0.0)
-                    .ok_or("--seconds needs a number > 0")?;
-            }
-            "--out" => out = args.next().ok_or("--out needs a path")?,
-            "-h" | "--help" => {
-                println!("usage: recorder_load [--seconds S] [--out OUT.mcap]");
-                return Ok(None);
-            }
-            other => return Err(format!("unknown argument {other:?} (try --help)")),
-        }
-    }
-    Ok(Some((secs, out)))
-}
+mod common;
 
 fn main() -> Result<(), Box<dyn std::error::Error>> {
-    let Some((secs, out)) = args()? else {
+    let usage = "recorder_load [--seconds S] [--out OUT.mcap]";
+    let Some(args) = common::parse(usage, 10.0, true)? else {
         return Ok(());
     };
+    let secs = args.seconds;
+    let out = args.out.unwrap_or_else(|| {
+        std::env::temp_dir()
+            .join("vpsom-recorder-load.mcap")
+            .display()
+            .to_string()
+    });
     let cfg = RecorderConfig::default();
     let rec = Recorder::create(out.as_ref(), &cfg, RecorderSetup::default())?;
     let h = rec.handle();

@@ -14,34 +14,14 @@ use runtime::ports::{PortContext, PortsConfig, Stamp};
 use shm_types::DepthFrame;
 use std::time::{Duration, Instant};
 
-/// `--seconds S` (default 2) from the command line; `None` for `--help`.
-fn seconds() -> Result<Option<f64>, String> {
-    let mut secs = 2.0;
-    let mut args = std::env::args().skip(1);
-    while let Some(a) = args.next() {
-        match a.as_str() {
-            "--seconds" => {
-                secs = args
-                    .next()
-                    .and_then(|s| s.parse::<f64>().ok())
-                    .filter(|s| s.is_finite() && *s > 0.0)
-                    .ok_or("--seconds needs a number > 0")?;
-            }
-            "-h" | "--help" => {
-                println!("usage: rt_probe [--seconds S]   (each executor run: S s at 1 kHz)");
-                return Ok(None);
-            }
-            other => return Err(format!("unknown argument {other:?} (try --help)")),
-        }
-    }
-    Ok(Some(secs))
-}
+mod common;
 
 fn main() -> Result<(), Box<dyn std::error::Error>> {
-    let Some(secs) = seconds()? else {
+    let usage = "rt_probe [--seconds S]   (each executor run: S s at 1 kHz)";
+    let Some(args) = common::parse(usage, 2.0, false)? else {
         return Ok(());
     };
-    let cycles = ((secs * 1000.0).round() as u64).max(1);
+    let cycles = ((args.seconds * 1000.0).round() as u64).max(1);
     for margin_us in [0u64, 200] {
         let cfg = ExecutorConfig {
             spin_margin_us: margin_us,
