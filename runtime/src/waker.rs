@@ -147,9 +147,14 @@ impl BackupWaker {
                 false
             }
             Err(_) => {
-                // Claimed by the waker: wait until it has moved and woken this thread.
+                // Claimed by the waker: wait until it has moved and woken this thread. Yield,
+                // never spin: moving this thread can block the waker (the kernel waits for the
+                // migration), this thread can then land on the waker's CPU and run there, and
+                // a SCHED_FIFO thread spinning at the waker's priority would never let the
+                // waker run again to finish (a livelock seen in `vpsom run`: LBV cycles stop,
+                // the `lbv-backup` thread runnable on the same CPU with no CPU time).
                 while l.target.load(Ordering::Acquire) == RESCUING {
-                    std::hint::spin_loop();
+                    std::thread::yield_now();
                 }
                 l.target.store(0, Ordering::Release);
                 self.away.set(true);
