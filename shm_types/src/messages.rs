@@ -194,11 +194,14 @@ pub struct Detections {
     pub height: u32,
     /// Number of valid entries in `items`.
     pub count: u32,
-    /// Padding, always 0.
-    pub reserved: u32,
+    /// What the detector gave: [`mask_mode::BOXES`] (0: class, score and box only, as a
+    /// YOLO-class detector; `labels` is unused and `mask_pixels` is 0) or [`mask_mode::MASKS`]
+    /// (1: instance segmentation; `labels` holds each item's mask).
+    pub masks: u32,
     /// Detected instances, first `count` valid.
     pub items: [Detection; MAX_DETECTIONS],
-    /// Row-major instance label image: 0 = none, `k` = the item whose `label == k`.
+    /// Row-major instance label image: 0 = none, `k` = the item whose `label == k`. Valid only
+    /// when `masks == mask_mode::MASKS`.
     pub labels: [u8; MAX_PIXELS],
 }
 
@@ -228,6 +231,7 @@ impl Validate for Detections {
         c.count("width", self.width as usize, MAX_WIDTH)?;
         c.count("height", self.height as usize, MAX_HEIGHT)?;
         c.count("count", self.count as usize, MAX_DETECTIONS)?;
+        c.count("masks", self.masks as usize, mask_mode::MASKS as usize)?;
         for (k, d) in self.detections().iter().enumerate() {
             c.range(&format!("items[{k}].score"), d.score, 0.0, 1.0)?;
             c.count(
@@ -254,6 +258,14 @@ impl Validate for Detections {
         }
         Ok(())
     }
+}
+
+/// Values of [`Detections::masks`].
+pub mod mask_mode {
+    /// Boxes only (YOLO-class detector): the label image is unused.
+    pub const BOXES: u32 = 0;
+    /// Instance masks in the label image.
+    pub const MASKS: u32 = 1;
 }
 
 /// Navigation status reported in [`RobotState::nav_status`].

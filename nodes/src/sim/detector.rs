@@ -137,7 +137,7 @@ impl Detector {
         let n = w * h;
         out.width = w as u32;
         out.height = h as u32;
-        out.reserved = 0;
+        out.masks = shm_types::mask_mode::MASKS;
         out.count = 0;
 
         // 1. Visible pixels and boxes per object.
