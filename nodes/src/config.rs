@@ -42,6 +42,8 @@ pub struct Config {
     pub run: RunConfig,
     /// `vpsom bench` (lockstep experiments) settings.
     pub bench: BenchConfig,
+    /// `vpsom sensing` (sensing report) settings.
+    pub sensing: SensingConfig,
     /// MCAP recorder.
     pub recorder: runtime::recorder::RecorderConfig,
 }
@@ -274,6 +276,57 @@ impl BenchConfig {
     }
 }
 
+/// `[sensing]`: the scripted tour of the sensing report (`vpsom sensing`).
+#[derive(Debug, Clone, Copy, PartialEq, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct SensingConfig {
+    /// Frames per scene.
+    pub frames: u64,
+    /// Tour goals lie this far (m) outside each background object's footprint circle.
+    pub ring_clearance: f32,
+    /// Goals per ring around a background object.
+    pub ring_points: usize,
+    /// A goal not reached by then is skipped, s.
+    pub goal_timeout_s: f64,
+    /// Amplitude of the neck's yaw sweep, degrees.
+    pub neck_amplitude_deg: f32,
+    /// Period of the neck's yaw sweep, s.
+    pub neck_period_s: f32,
+}
+
+impl Default for SensingConfig {
+    /// The `[sensing]` section of the built-in `config/default.toml`.
+    fn default() -> Self {
+        runtime::config::DEFAULTS.section("sensing")
+    }
+}
+
+impl SensingConfig {
+    fn validate(&self, c: &Checker) -> Result<(), ConfigError> {
+        c.count("sensing.frames", self.frames as usize, 1, 1_000_000)?;
+        c.in_range(
+            "sensing.ring_clearance",
+            self.ring_clearance.into(),
+            0.0,
+            10.0,
+        )?;
+        c.count("sensing.ring_points", self.ring_points, 1, 64)?;
+        c.in_range("sensing.goal_timeout_s", self.goal_timeout_s, 0.1, 3600.0)?;
+        c.in_range(
+            "sensing.neck_amplitude_deg",
+            self.neck_amplitude_deg.into(),
+            0.0,
+            180.0,
+        )?;
+        c.in_range(
+            "sensing.neck_period_s",
+            self.neck_period_s.into(),
+            0.1,
+            3600.0,
+        )
+    }
+}
+
 impl Default for Config {
     /// The built-in `config/default.toml` ([`Config::builtin`]).
     fn default() -> Self {
@@ -347,6 +400,7 @@ impl Config {
         self.planner.validate(&c)?;
         self.run.validate(&c)?;
         self.bench.validate(&c)?;
+        self.sensing.validate(&c)?;
         self.recorder.validate(&c)
     }
 }

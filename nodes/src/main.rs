@@ -2,7 +2,7 @@
 
 use anyhow::Context;
 use clap::{Args, Parser, Subcommand};
-use nodes::app::{bench, deploy, lockstep};
+use nodes::app::{bench, deploy, lockstep, sensing};
 use nodes::config::Config;
 use nodes::sim::{BUILTIN_SCENES, Scene};
 use std::path::{Path, PathBuf};
@@ -27,6 +27,9 @@ enum Command {
     Run(RunCmd),
     /// Reproduce the paper's experiments: scenes × planners × seeds on the lockstep host.
     Bench(BenchCmd),
+    /// Measure the simulated sensing on a scripted tour: detector recall, false positives, box
+    /// IoU, confusion, invalid depth, pose ATE/RPE; prints a table, writes sensing.json.
+    Sensing(SensingCmd),
     /// Re-render tables and plots from saved metrics.json files.
     Report {
         /// Run directories or trees containing metrics.json files.
@@ -126,6 +129,21 @@ struct BenchCmd {
     ablation: bool,
 }
 
+#[derive(Debug, Args)]
+struct SensingCmd {
+    /// Scenes: built-in names or scene files (default: the three paper scenes).
+    scenes: Vec<String>,
+    /// Seed of the simulator.
+    #[arg(long, default_value_t = 1)]
+    seed: u64,
+    /// Frames per scene (default: `[sensing] frames`).
+    #[arg(long)]
+    frames: Option<u64>,
+    /// Output directory.
+    #[arg(long, default_value = "results/sensing")]
+    out: PathBuf,
+}
+
 #[derive(Debug, Subcommand)]
 enum TraceCmd {
     /// Topics, message counts, time range and drop counts.
@@ -164,6 +182,7 @@ fn main() -> ExitCode {
     let result = match command {
         Command::Run(cmd) => run(config, cmd),
         Command::Bench(cmd) => bench_cmd(config, cmd),
+        Command::Sensing(cmd) => sensing_cmd(config, cmd),
         Command::Report { dirs, out } => report(&dirs, out),
         Command::Trace(cmd) => trace(cmd),
         Command::Doctor => doctor(config),
@@ -374,6 +393,47 @@ fn bench_cmd(config: Option<PathBuf>, cmd: BenchCmd) -> anyhow::Result<ExitCode>
     } else {
         ExitCode::FAILURE
     })
+}
+
+fn sensing_cmd(config: Option<PathBuf>, cmd: SensingCmd) -> anyhow::Result<ExitCode> {
+    let cfg = load_config(config.as_deref())?;
+    let names = if cmd.scenes.is_empty() {
+        BUILTIN_SCENES.iter().map(|(n, _)| n.to_string()).collect()
+    } else {
+        cmd.scenes
+    };
+    let spec = sensing::SensingSpec {
+        scenes: names
+            .iter()
+            .map(|s| load_scene(s))
+            .collect::<anyhow::Result<_>>()?,
+        frames: cmd.frames.unwrap_or(cfg.sensing.frames),
+        seed: cmd.seed,
+        config: cfg,
+    };
+    anyhow::ensure!(spec.frames > 0, "--frames must be > 0");
+    let c = &spec.config;
+    eprintln!(
+        "vpsom sensing: {} scene(s) × {} frames, camera {}x{} at {} Hz, seed {}",
+        spec.scenes.len(),
+        spec.frames,
+        c.camera.width,
+        c.camera.height,
+        sensing::camera_hz(c),
+        spec.seed
+    );
+    let start = std::time::Instant::now();
+    let report = sensing::run_sensing(&spec, |f| {
+        eprintln!(
+            "  {} done ({:.0} s)",
+            f.scene,
+            start.elapsed().as_secs_f64()
+        )
+    })?;
+    let path = report.write(&cmd.out)?;
+    print!("{}", report.table());
+    println!("report: {}", path.display());
+    Ok(ExitCode::SUCCESS)
 }
 
 fn report(dirs: &[PathBuf], out: Option<PathBuf>) -> anyhow::Result<ExitCode> {

@@ -11,7 +11,8 @@
 //!   [`Metrics`] (`metrics.json`) and the [`SessionLog`] accumulator;
 //! - [`mapfile`]: `map.json` (write, read, re-score);
 //! - [`report`]: Tables 1 and 2 of the paper from many `metrics.json` (`report.md`, CSVs);
-//! - [`plot`]: Figure-10-style top-down PNGs.
+//! - [`plot`]: Figure-10-style top-down PNGs;
+//! - [`sensing`]: the sensing report (`vpsom sensing`: detector, depth and pose errors per frame).
 //!
 //! Ground truth enters only through the plain [`GtObject`] type, so `eval` does not depend on
 //! the simulator's world types.
@@ -39,6 +40,7 @@ pub mod matching;
 pub mod metrics;
 pub mod plot;
 pub mod report;
+pub mod sensing;
 
 pub use mapfile::{MapFile, MapFileObject, rescore_map_file};
 pub use matching::{MatchParams, ObjectMatch};
