@@ -27,6 +27,7 @@
 //! Rendering's parallel work (depth ray casting and mask bleed, by image rows) runs on the
 //! simulator's own named thread pool, [`SimPool`], not on rayon's global pool.
 
+mod artefacts;
 mod camera;
 mod config;
 mod detector;
@@ -36,6 +37,7 @@ mod robot;
 mod scene;
 mod world;
 
+pub use artefacts::DepthArtefacts;
 pub use camera::{DepthCamera, RenderBuffers};
 pub use config::{DetectorConfig, RobotConfig, SimConfig};
 pub use detector::Detector;
@@ -43,8 +45,8 @@ pub use localization::Localization;
 pub use nav::{GridTooLarge, NavGrid, NavRefusal};
 pub use robot::Robot;
 pub use scene::{
-    BUILTIN_SCENES, OVERLAP_TOLERANCE, Room, SUPPORT_TOLERANCE, Scene, SceneError, SceneObject,
-    Shape,
+    BUILTIN_SCENES, Material, OVERLAP_TOLERANCE, Room, SUPPORT_TOLERANCE, Scene, SceneError,
+    SceneObject, Shape,
 };
 pub use world::{Hit, STRUCTURE, World};
 
@@ -123,6 +125,7 @@ pub struct Sim {
     scene: Scene,
     world: World,
     camera: DepthCamera,
+    artefacts: DepthArtefacts,
     mount: CameraMount,
     detector: Detector,
     robot: Robot,
@@ -151,6 +154,7 @@ impl Sim {
             pool: SimPool::shared(),
             world: World::new(&scene),
             camera: DepthCamera::new(&cfg.camera, &cfg.sim, mix(seed, &[1])),
+            artefacts: DepthArtefacts::new(&scene, &cfg.camera, &cfg.sim, mix(seed, &[1, 1])),
             mount: cfg.camera.mount,
             detector: Detector::new(&scene, &cfg.detector, mix(seed, &[2])),
             robot: Robot::new(
@@ -230,6 +234,10 @@ impl Sim {
         let (pool, frames) = (&self.pool, self.frames);
         let (camera, world, buf) = (&self.camera, &self.world, &mut self.buf);
         pool.install(|| camera.render(world, &true_pose, frames, frame.pixels_mut(), buf));
+        pool.install(|| {
+            self.artefacts
+                .apply(world, &true_pose, frames, buf, frame.pixels_mut())
+        });
         self.loc.count_visible(&cam, &true_pose, &self.buf);
         self.loc.update(
             self.robot.camera_turn_rate,
