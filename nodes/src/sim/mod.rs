@@ -24,8 +24,10 @@
 //!
 //! Ground truth ([`Sim::scene`], [`Sim::true_state`]) is for evaluation and recording only.
 //!
-//! Rendering's parallel work (depth ray casting and mask bleed, by image rows) runs on the
-//! simulator's own named thread pool, [`SimPool`], not on rayon's global pool.
+//! Rendering's parallel work (depth ray casting, time-of-flight depth artefacts
+//! ([`DepthArtefacts`]: flying pixels at edges, dark/specular/glass materials) and mask bleed, by
+//! image rows) runs on the simulator's own named thread pool, [`SimPool`], not on rayon's global
+//! pool.
 
 mod artefacts;
 mod camera;
@@ -216,6 +218,8 @@ impl Sim {
     /// (from the ESTIMATED base pose), headers (`seq` = frame number from 1, `stamp_ns` and
     /// `sim_time_ns` = `now_ns`; a host may overwrite `stamp_ns`/`seq`, keeping
     /// `dets.frame_seq` equal to the frame's `seq`) and updates the localization model.
+    /// The depth carries the camera's noise and then the [`DepthArtefacts`]; the ground truth
+    /// ([`Sim::last_render`]) is left untouched by both.
     /// Runs on the sim's [`SimPool`]. No heap allocation after the first call.
     pub fn render(&mut self, frame: &mut DepthFrame, dets: &mut Detections, now_ns: u64) {
         let cam = *self.camera.camera();
