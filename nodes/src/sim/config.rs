@@ -17,6 +17,24 @@ pub struct SimConfig {
     pub grazing_deg: f32,
     /// Probability that any valid pixel drops out (0) at random.
     pub dropout: f32,
+    /// Depth artefacts (`sim/artefacts.rs`): neighbouring true depths that differ by at least
+    /// this make a depth edge, metres.
+    pub edge_min_jump_m: f32,
+    /// Pixels on each side of a depth edge that its artefacts reach.
+    pub edge_width_px: u32,
+    /// Probability that a valid edge pixel becomes a mixed ("flying") pixel, its depth between
+    /// the two surfaces'.
+    pub edge_mixed: f32,
+    /// Probability that a valid edge pixel is removed (0), as by the driver's edge filter.
+    pub edge_invalid: f32,
+    /// Probability that a valid pixel of a `material = "glass"` object is invalid (0).
+    pub glass_invalid: f32,
+    /// Probability that a valid pixel of a glass object reads the surface behind it.
+    pub glass_through: f32,
+    /// Probability that a valid pixel of a `material = "dark"` object is invalid (0).
+    pub dark_invalid: f32,
+    /// Probability that a valid pixel of a `material = "specular"` object is invalid (0).
+    pub specular_invalid: f32,
     /// Localization features per m² on object surfaces (textured).
     pub feature_density_objects: f32,
     /// Localization features per m² on the room walls (mostly plain).
@@ -51,6 +69,7 @@ impl SimConfig {
         c.in_range("sim.noise_b", self.noise_b.into(), 0.0, 0.5)?;
         c.in_range("sim.grazing_deg", self.grazing_deg.into(), 1.0, 90.0)?;
         c.in_range("sim.dropout", self.dropout.into(), 0.0, 1.0)?;
+        self.validate_artefacts(c)?;
         c.in_range(
             "sim.feature_density_objects",
             self.feature_density_objects.into(),
@@ -81,6 +100,42 @@ impl SimConfig {
             self.failure_min_distance_m.into(),
             0.0,
             1000.0,
+        )
+    }
+}
+
+impl SimConfig {
+    /// Range-check the depth-artefact keys (each probability in [0, 1]; the outcomes of one
+    /// pixel sum to at most 1).
+    fn validate_artefacts(&self, c: &Checker) -> Result<(), ConfigError> {
+        c.in_range(
+            "sim.edge_min_jump_m",
+            self.edge_min_jump_m.into(),
+            0.001,
+            10.0,
+        )?;
+        c.count("sim.edge_width_px", self.edge_width_px as usize, 1, 8)?;
+        for (key, p) in [
+            ("sim.edge_mixed", self.edge_mixed),
+            ("sim.edge_invalid", self.edge_invalid),
+            ("sim.glass_invalid", self.glass_invalid),
+            ("sim.glass_through", self.glass_through),
+            ("sim.dark_invalid", self.dark_invalid),
+            ("sim.specular_invalid", self.specular_invalid),
+        ] {
+            c.in_range(key, p.into(), 0.0, 1.0)?;
+        }
+        c.require(
+            self.edge_mixed + self.edge_invalid <= 1.0,
+            "sim.edge_invalid",
+            self.edge_invalid,
+            "edge_mixed + edge_invalid must be at most 1",
+        )?;
+        c.require(
+            self.glass_invalid + self.glass_through <= 1.0,
+            "sim.glass_through",
+            self.glass_through,
+            "glass_invalid + glass_through must be at most 1",
         )
     }
 }

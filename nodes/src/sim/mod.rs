@@ -24,9 +24,12 @@
 //!
 //! Ground truth ([`Sim::scene`], [`Sim::true_state`]) is for evaluation and recording only.
 //!
-//! Rendering's parallel work (depth ray casting and mask bleed, by image rows) runs on the
-//! simulator's own named thread pool, [`SimPool`], not on rayon's global pool.
+//! Rendering's parallel work (depth ray casting, time-of-flight depth artefacts
+//! ([`DepthArtefacts`]: flying pixels at edges, dark/specular/glass materials) and mask bleed, by
+//! image rows) runs on the simulator's own named thread pool, [`SimPool`], not on rayon's global
+//! pool.
 
+mod artefacts;
 mod camera;
 mod config;
 mod detector;
@@ -36,6 +39,7 @@ mod robot;
 mod scene;
 mod world;
 
+pub use artefacts::DepthArtefacts;
 pub use camera::{DepthCamera, RenderBuffers};
 pub use config::{DetectorConfig, RobotConfig, SimConfig};
 pub use detector::Detector;
@@ -43,8 +47,8 @@ pub use localization::Localization;
 pub use nav::{GridTooLarge, NavGrid, NavRefusal};
 pub use robot::Robot;
 pub use scene::{
-    BUILTIN_SCENES, OVERLAP_TOLERANCE, Room, SUPPORT_TOLERANCE, Scene, SceneError, SceneObject,
-    Shape,
+    BUILTIN_SCENES, Material, OVERLAP_TOLERANCE, Room, SUPPORT_TOLERANCE, Scene, SceneError,
+    SceneObject, Shape,
 };
 pub use world::{Hit, STRUCTURE, World};
 
@@ -123,6 +127,7 @@ pub struct Sim {
     scene: Scene,
     world: World,
     camera: DepthCamera,
+    artefacts: DepthArtefacts,
     mount: CameraMount,
     detector: Detector,
     robot: Robot,
@@ -151,6 +156,7 @@ impl Sim {
             pool: SimPool::shared(),
             world: World::new(&scene),
             camera: DepthCamera::new(&cfg.camera, &cfg.sim, mix(seed, &[1])),
+            artefacts: DepthArtefacts::new(&scene, &cfg.camera, &cfg.sim, mix(seed, &[1, 1])),
             mount: cfg.camera.mount,
             detector: Detector::new(&scene, &cfg.detector, mix(seed, &[2])),
             robot: Robot::new(
@@ -212,6 +218,8 @@ impl Sim {
     /// (from the ESTIMATED base pose), headers (`seq` = frame number from 1, `stamp_ns` and
     /// `sim_time_ns` = `now_ns`; a host may overwrite `stamp_ns`/`seq`, keeping
     /// `dets.frame_seq` equal to the frame's `seq`) and updates the localization model.
+    /// The depth carries the camera's noise and then the [`DepthArtefacts`]; the ground truth
+    /// ([`Sim::last_render`]) is left untouched by both.
     /// Runs on the sim's [`SimPool`]. No heap allocation after the first call.
     pub fn render(&mut self, frame: &mut DepthFrame, dets: &mut Detections, now_ns: u64) {
         let cam = *self.camera.camera();
@@ -230,6 +238,10 @@ impl Sim {
         let (pool, frames) = (&self.pool, self.frames);
         let (camera, world, buf) = (&self.camera, &self.world, &mut self.buf);
         pool.install(|| camera.render(world, &true_pose, frames, frame.pixels_mut(), buf));
+        pool.install(|| {
+            self.artefacts
+                .apply(world, &true_pose, frames, buf, frame.pixels_mut())
+        });
         self.loc.count_visible(&cam, &true_pose, &self.buf);
         self.loc.update(
             self.robot.camera_turn_rate,

@@ -6,6 +6,24 @@
 //! names, interpenetrating objects, objects outside the room and more objects than an
 //! [`shm_types::ObjectMap`] holds, each with its own [`SceneError`] variant naming the file, the
 //! object and the field.
+//!
+//! Object keys: `name` (unique), `class` (COCO class name), `background` (optional; default from
+//! the class), `center` and `size` (metres, object frame x, y, z), `yaw` (rad about +z, default
+//! 0), `shape` (`"box"`, the default, or `"cylinder"` with size x = y = diameter) and
+//! `material`: how the depth sensor sees the surface ([`Material`]; `"default"` if absent):
+//!
+//! ```toml
+//! [[object]]
+//! name = "bottle_tall"
+//! class = "bottle"
+//! center = [-2.491, 0.549, 0.8665]
+//! size = [0.073, 0.073, 0.289]
+//! shape = "cylinder"
+//! material = "glass"   # "default" | "glass" | "dark" | "specular"
+//! ```
+//!
+//! The material's effect on depth (rates in `config/default.toml` `[sim]`) is applied by the
+//! simulator's depth artefacts (`sim/artefacts.rs`); the detector and ground truth ignore it.
 
 use crate::geom::Cuboid;
 use glam::{Vec2, Vec3};
@@ -151,6 +169,46 @@ pub enum Shape {
     Cylinder,
 }
 
+/// How a surface looks to a time-of-flight depth sensor (Kinect v2). The effect of each on the
+/// depth image, and its rates, are the `[sim]` keys `glass_*`, `dark_invalid` and
+/// `specular_invalid` (see `sim/artefacts.rs`).
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Default)]
+pub enum Material {
+    /// Matte, diffuse, bright enough: only the camera's σ(z) noise and random dropout.
+    #[default]
+    Default,
+    /// Transparent (glass bottles, wine glasses, glass vases): often invalid, often reads the
+    /// surface behind it.
+    Glass,
+    /// Dark, low-reflectance (black plastic, dark fabric): often invalid (too little returned
+    /// light).
+    Dark,
+    /// Shiny, mirror-like (polished metal, glazed ceramics): often invalid (light reflected away
+    /// or saturating).
+    Specular,
+}
+
+impl Material {
+    /// The names accepted in scene files, in the order of the enum.
+    pub const NAMES: [&'static str; 4] = ["default", "glass", "dark", "specular"];
+
+    /// The material named `name` in a scene file, `None` if none is.
+    pub fn from_name(name: &str) -> Option<Material> {
+        match name {
+            "default" => Some(Material::Default),
+            "glass" => Some(Material::Glass),
+            "dark" => Some(Material::Dark),
+            "specular" => Some(Material::Specular),
+            _ => None,
+        }
+    }
+
+    /// The name used in scene files.
+    pub fn name(self) -> &'static str {
+        Self::NAMES[self as usize]
+    }
+}
+
 /// One object of a scene (ground truth).
 #[derive(Debug, Clone, PartialEq)]
 pub struct SceneObject {
@@ -170,6 +228,8 @@ pub struct SceneObject {
     pub yaw: f32,
     /// Box or cylinder.
     pub shape: Shape,
+    /// Surface material as the depth sensor sees it.
+    pub material: Material,
 }
 
 impl SceneObject {
@@ -321,6 +381,7 @@ struct RawObject {
     yaw: f32,
     #[serde(default)]
     shape: RawShape,
+    material: Option<String>,
 }
 
 #[derive(Debug, Default, Deserialize)]
@@ -334,7 +395,7 @@ enum RawShape {
 const SCENE_KEYS: [&str; 4] = ["name", "room", "robot", "object"];
 const ROOM_KEYS: [&str; 3] = ["min", "max", "height"];
 const ROBOT_KEYS: [&str; 1] = ["start"];
-const OBJECT_KEYS: [&str; 7] = [
+const OBJECT_KEYS: [&str; 8] = [
     "name",
     "class",
     "background",
@@ -342,6 +403,7 @@ const OBJECT_KEYS: [&str; 7] = [
     "size",
     "yaw",
     "shape",
+    "material",
 ];
 
 impl Scene {
@@ -521,7 +583,19 @@ fn build(file: &Path, raw: RawScene) -> Result<Scene, SceneError> {
                 "a cylinder needs size x = y (the diameter)",
             ));
         }
+        let material = match o.material.as_deref() {
+            None => Material::Default,
+            Some(m) => Material::from_name(m).ok_or_else(|| {
+                invalid(
+                    &o.name,
+                    "material",
+                    format!("{m:?}"),
+                    "must be \"default\", \"glass\", \"dark\" or \"specular\"",
+                )
+            })?,
+        };
         let obj = SceneObject {
+            material,
             background: o
                 .background
                 .unwrap_or_else(|| shm_types::is_background_class(class_id)),
@@ -665,6 +739,35 @@ mod tests {
         assert!(!s.objects[1].background);
         assert_eq!(s.clusters, vec![Some(0), Some(0), None]);
         assert_eq!(s.objects[1].shape, Shape::Cylinder);
+        assert_eq!(s.objects[1].material, Material::Default, "default material");
+        let glass =
+            cup("glass", -2.0, 0.0, 0.75).replace("cylinder\"", "cylinder\"\nmaterial = \"glass\"");
+        assert_eq!(parse(&glass).unwrap().objects[1].material, Material::Glass);
+        for (k, name) in Material::NAMES.iter().enumerate() {
+            assert_eq!(Material::from_name(name).unwrap().name(), *name);
+            assert_eq!(Material::from_name(name).unwrap() as usize, k);
+        }
+    }
+
+    #[test]
+    fn an_unknown_material_is_an_error_naming_file_object_field_and_value() {
+        let body =
+            cup("c", -2.0, 0.0, 0.75).replace("cylinder\"", "cylinder\"\nmaterial = \"chrome\"");
+        let e = parse(&body).unwrap_err();
+        assert!(
+            matches!(&e, SceneError::Invalid { object, field: "material", value, .. }
+                if object == "c" && value == "\"chrome\""),
+            "{e}"
+        );
+        let msg = e.to_string();
+        assert!(
+            msg.starts_with("bad.toml: c: material = \"chrome\": must be"),
+            "{msg}"
+        );
+        let e = parse(&cup("c", -2.0, 0.0, 0.75).replace("cylinder\"", "cylinder\"\nmaterial = 3"))
+            .unwrap_err();
+        assert!(matches!(&e, SceneError::Parse { .. }), "{e}");
+        assert!(e.to_string().contains("material"), "{e}");
     }
 
     #[test]
