@@ -29,6 +29,11 @@
 //! bleed by 0..=`mask_bleed_px` pixels; a false positive's mask is its source's pixels in its box)
 //! and boxes come from the final masks.
 //!
+//! Calibration (`nodes/tests/detector_calibration.rs`: rings of views around the background
+//! objects of the three paper scenes, 456 frames at 640×480, shared definitions): recall of
+//! visible objects 0.77 (small 0.53, truncated 0.63), 0.34 false positives per frame, mean box
+//! IoU 0.76, label confusion 10 % of matches; `detect` 0.3–0.4 ms per frame in box mode.
+//!
 //! All randomness comes from PCG streams per (seed, frame, object), per (seed, object, view bin)
 //! for confusion and per (seed, frame) for false positives: frames do not depend on threads.
 
