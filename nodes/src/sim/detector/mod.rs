@@ -335,11 +335,15 @@ impl Detector {
         self.add_false_positives(instance, camera, world_from_camera, frame_index, min_px);
 
         // 5. Survivors by score, at most MAX_DETECTIONS.
-        self.cands.sort_by(|a, b| {
+        // (Unstable sort: no allocation; the key is total up to identical candidates.)
+        self.cands.sort_unstable_by(|a, b| {
             (a.into != NONE)
                 .cmp(&(b.into != NONE))
                 .then(b.score.total_cmp(&a.score))
                 .then(a.inst.cmp(&b.inst))
+                .then(a.source.cmp(&b.source))
+                .then(a.bbox.cmp(&b.bbox))
+                .then(a.class_id.cmp(&b.class_id))
         });
         let count = self
             .cands
@@ -433,16 +437,17 @@ impl Detector {
         for (l, &k) in labels.iter_mut().zip(&instance[..n]) {
             *l = map[k as usize];
         }
-        // False positives: their source's pixels inside their box.
+        // False positives: their source's pixels inside their box (not taken by an earlier one).
         for (l, c) in self.cands[..count]
             .iter()
             .enumerate()
             .filter(|(_, c)| c.inst == 0)
         {
             let b = c.bbox.map(usize::from);
+            let own = map[c.source as usize];
             for y in b[1]..b[3] {
                 for x in b[0]..b[2] {
-                    if instance[y * w + x] == c.source {
+                    if instance[y * w + x] == c.source && labels[y * w + x] == own {
                         labels[y * w + x] = (l + 1) as u8;
                     }
                 }

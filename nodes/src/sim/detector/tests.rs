@@ -351,3 +351,51 @@ fn same_seed_same_detections() {
     assert_eq!(all(1), all(1));
     assert_ne!(all(1), all(2));
 }
+
+#[test]
+fn masks_mode_merged_objects_share_one_mask_and_false_positives_get_their_source_pixels() {
+    let cfg = DetectorConfig {
+        mode: "masks".into(),
+        nms_iou: 0.45,
+        merge_union: 1.0,
+        fp_per_frame: 2.0,
+        ..perfect()
+    };
+    let mut det = Detector::new(&scene(), &cfg, 19);
+    let pose =
+        Affine3A::from_mat3_translation(optical_rotation(0.0, 0.5), Vec3::new(2.5, 0.0, 1.2));
+    let (a, b, table) = (
+        [200, 150, 300, 250],
+        [215, 165, 315, 265],
+        [150, 300, 500, 480],
+    );
+    let img = image(&[(3, table), (1, a), (2, b)]);
+    let (mut fps, mut empty) = (0, 0);
+    for f in 0..50 {
+        let out = run(&mut det, &img, &pose, f);
+        for d in out.detections() {
+            let mut n = 0;
+            for (i, l) in out.label_pixels().iter().enumerate() {
+                if *l as u16 == d.label {
+                    n += 1;
+                    if d.class_id == det.class_ids[0] {
+                        assert!(img[i] == 1 || img[i] == 2);
+                    }
+                }
+            }
+            assert_eq!(n, d.mask_pixels);
+            if d.class_id == det.class_ids[0] {
+                assert_eq!(n, 100 * 100 + 100 * 100 - 85 * 85, "union mask");
+                assert_eq!(d.bbox, [200, 150, 315, 265]);
+            } else if d.class_id != det.class_ids[2] {
+                // (Empty only when an earlier false positive took its pixels.)
+                fps += 1;
+                empty += usize::from(n == 0);
+            }
+        }
+    }
+    assert!(
+        fps > 50 && empty * 10 < fps,
+        "{fps} false positives, {empty} empty"
+    );
+}
