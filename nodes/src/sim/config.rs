@@ -140,10 +140,13 @@ impl SimConfig {
     }
 }
 
-/// `[detector]` section: the simulated instance-segmentation detector (YOLO stand-in).
+/// `[detector]` section: the simulated object detector (a YOLO stand-in). Pixel counts are
+/// at 640×480 and scale with the image area.
 #[derive(Debug, Clone, PartialEq, Deserialize)]
 #[serde(deny_unknown_fields)]
 pub struct DetectorConfig {
+    /// `"boxes"` (class, score, box: a YOLO-class detector) or `"masks"` (plus instance masks).
+    pub mode: String,
     /// Objects with fewer visible pixels are never detected.
     pub min_pixels: u32,
     /// Miss probability of a large, fully visible object.
@@ -154,20 +157,53 @@ pub struct DetectorConfig {
     pub small_pixels: u32,
     /// Extra miss probability for an occluded object, scaled by its hidden fraction.
     pub miss_occluded: f32,
-    /// Mean score of a fully visible detection.
+    /// Extra miss probability for an object cut by the image border.
+    pub miss_truncated: f32,
+    /// Mean score of a large, fully visible detection.
     pub score_mean: f32,
     /// Standard deviation of the score.
     pub score_std: f32,
+    /// Score lost by a fully hidden object, scaled by the hidden fraction.
+    pub score_occluded: f32,
+    /// Score lost by an object cut by the image border.
+    pub score_truncated: f32,
+    /// Score lost by a tiny object, scaled by `1 − pixels / small_pixels`.
+    pub score_small: f32,
+    /// Confidence threshold: detections scoring below it are not reported.
+    pub score_min: f32,
     /// Box edge jitter σ, pixels.
     pub box_jitter_px: f32,
-    /// Box edge jitter σ as a fraction of the box size.
+    /// Box edge jitter σ as a fraction of the box size (width for x edges, height for y).
     pub box_jitter_frac: f32,
-    /// Masks grow by a random 0..=`mask_bleed_px` pixels onto neighbours and background.
+    /// Jitter multiplier for objects cut by the image border.
+    pub truncated_jitter: f32,
+    /// `"masks"` mode: masks grow by a random 0..=`mask_bleed_px` pixels onto neighbours.
     pub mask_bleed_px: u32,
-    /// Probability that a detection of a look-alike class gets another class of its group.
+    /// Same-class boxes overlapping by more than this IoU come out as one (non-maximum
+    /// suppression); 1 disables merging.
+    pub nms_iou: f32,
+    /// Probability that the merged box is the union of both boxes (else the higher-score box).
+    pub merge_union: f32,
+    /// Probability that an object seen from a viewing-direction/distance bin gets another class
+    /// of its look-alike group (the same draw for the whole bin).
     pub confusion_rate: f32,
-    /// Groups of look-alike COCO classes.
+    /// Width of a viewing-direction bin for label confusion, degrees.
+    pub confusion_bin_deg: f32,
+    /// Width of a viewing-distance bin for label confusion, metres.
+    pub confusion_bin_m: f32,
+    /// Groups of look-alike COCO classes (an object's class uses the first group holding it).
     pub confusion_groups: Vec<Vec<String>>,
+    /// Mean number of false positives per frame (Poisson; a frame without a place for one has
+    /// fewer).
+    pub fp_per_frame: f32,
+    /// Lowest false-positive score.
+    pub fp_score_min: f32,
+    /// Highest false-positive score.
+    pub fp_score_max: f32,
+    /// COCO classes of false positives on walls.
+    pub fp_wall_classes: Vec<String>,
+    /// False positives on parts of objects: each entry is `[object class, detected class...]`.
+    pub fp_on_objects: Vec<Vec<String>>,
 }
 
 impl Default for DetectorConfig {
@@ -178,30 +214,41 @@ impl Default for DetectorConfig {
 }
 
 impl DetectorConfig {
+    /// Whether the detector outputs instance masks (`mode = "masks"`).
+    pub fn masks(&self) -> bool {
+        self.mode == "masks"
+    }
+
     /// Range-check.
     pub fn validate(&self, c: &Checker) -> Result<(), ConfigError> {
-        c.count(
-            "detector.min_pixels",
-            self.min_pixels as usize,
-            1,
-            shm_types::MAX_PIXELS,
+        c.require(
+            self.mode == "boxes" || self.mode == "masks",
+            "detector.mode",
+            format!("{:?}", self.mode),
+            "must be \"boxes\" or \"masks\"",
         )?;
-        c.in_range("detector.miss_rate", self.miss_rate.into(), 0.0, 1.0)?;
-        c.in_range("detector.miss_small", self.miss_small.into(), 0.0, 1.0)?;
-        c.count(
-            "detector.small_pixels",
-            self.small_pixels as usize,
-            1,
-            shm_types::MAX_PIXELS,
-        )?;
-        c.in_range(
-            "detector.miss_occluded",
-            self.miss_occluded.into(),
-            0.0,
-            1.0,
-        )?;
-        c.in_range("detector.score_mean", self.score_mean.into(), 0.0, 1.0)?;
-        c.in_range("detector.score_std", self.score_std.into(), 0.0, 1.0)?;
+        let px = shm_types::MAX_PIXELS;
+        c.count("detector.min_pixels", self.min_pixels as usize, 1, px)?;
+        c.count("detector.small_pixels", self.small_pixels as usize, 1, px)?;
+        for (key, v) in [
+            ("detector.miss_rate", self.miss_rate),
+            ("detector.miss_small", self.miss_small),
+            ("detector.miss_occluded", self.miss_occluded),
+            ("detector.miss_truncated", self.miss_truncated),
+            ("detector.score_mean", self.score_mean),
+            ("detector.score_std", self.score_std),
+            ("detector.score_occluded", self.score_occluded),
+            ("detector.score_truncated", self.score_truncated),
+            ("detector.score_small", self.score_small),
+            ("detector.score_min", self.score_min),
+            ("detector.box_jitter_frac", self.box_jitter_frac),
+            ("detector.nms_iou", self.nms_iou),
+            ("detector.merge_union", self.merge_union),
+            ("detector.confusion_rate", self.confusion_rate),
+            ("detector.fp_score_min", self.fp_score_min),
+        ] {
+            c.in_range(key, v.into(), 0.0, 1.0)?;
+        }
         c.in_range(
             "detector.box_jitter_px",
             self.box_jitter_px.into(),
@@ -209,26 +256,56 @@ impl DetectorConfig {
             100.0,
         )?;
         c.in_range(
-            "detector.box_jitter_frac",
-            self.box_jitter_frac.into(),
-            0.0,
+            "detector.truncated_jitter",
+            self.truncated_jitter.into(),
             1.0,
+            10.0,
         )?;
         c.count("detector.mask_bleed_px", self.mask_bleed_px as usize, 0, 16)?;
         c.in_range(
-            "detector.confusion_rate",
-            self.confusion_rate.into(),
-            0.0,
+            "detector.confusion_bin_deg",
+            self.confusion_bin_deg.into(),
             1.0,
+            360.0,
         )?;
+        c.in_range(
+            "detector.confusion_bin_m",
+            self.confusion_bin_m.into(),
+            0.01,
+            100.0,
+        )?;
+        c.in_range("detector.fp_per_frame", self.fp_per_frame.into(), 0.0, 10.0)?;
+        c.require(
+            self.fp_score_max >= self.fp_score_min && self.fp_score_max <= 1.0,
+            "detector.fp_score_max",
+            self.fp_score_max,
+            "must be ≥ detector.fp_score_min and ≤ 1",
+        )?;
+        let coco = |key: String, name: &String| {
+            c.require(
+                shm_types::class_id(name).is_some(),
+                &key,
+                format!("{name:?}"),
+                "must be a COCO class name",
+            )
+        };
         for (g, group) in self.confusion_groups.iter().enumerate() {
             for (k, name) in group.iter().enumerate() {
-                c.require(
-                    shm_types::class_id(name).is_some(),
-                    &format!("detector.confusion_groups[{g}][{k}]"),
-                    format!("{name:?}"),
-                    "must be a COCO class name",
-                )?;
+                coco(format!("detector.confusion_groups[{g}][{k}]"), name)?;
+            }
+        }
+        for (k, name) in self.fp_wall_classes.iter().enumerate() {
+            coco(format!("detector.fp_wall_classes[{k}]"), name)?;
+        }
+        for (g, entry) in self.fp_on_objects.iter().enumerate() {
+            c.require(
+                entry.len() >= 2,
+                &format!("detector.fp_on_objects[{g}]"),
+                format!("{entry:?}"),
+                "must be [object class, detected class, ...]",
+            )?;
+            for (k, name) in entry.iter().enumerate() {
+                coco(format!("detector.fp_on_objects[{g}][{k}]"), name)?;
             }
         }
         Ok(())
@@ -362,6 +439,34 @@ mod tests {
         let e =
             Config::parse(f, "[detector]\nconfusion_groups = [[\"cup\", \"mug\"]]\n").unwrap_err();
         assert_eq!(e.key(), "detector.confusion_groups[0][1]", "{e}");
+        for (text, key) in [
+            ("mode = \"segments\"", "detector.mode"),
+            ("miss_truncated = 1.5", "detector.miss_truncated"),
+            ("score_occluded = -0.1", "detector.score_occluded"),
+            ("score_truncated = 2.0", "detector.score_truncated"),
+            ("score_small = -1.0", "detector.score_small"),
+            ("score_min = 1.1", "detector.score_min"),
+            ("truncated_jitter = 0.5", "detector.truncated_jitter"),
+            ("nms_iou = 1.5", "detector.nms_iou"),
+            ("merge_union = -0.5", "detector.merge_union"),
+            ("confusion_bin_deg = 0.0", "detector.confusion_bin_deg"),
+            ("confusion_bin_m = 0.0", "detector.confusion_bin_m"),
+            ("fp_per_frame = -1.0", "detector.fp_per_frame"),
+            ("fp_score_min = 2.0", "detector.fp_score_min"),
+            ("fp_score_max = 0.1", "detector.fp_score_max"),
+            (
+                "fp_wall_classes = [\"poster\"]",
+                "detector.fp_wall_classes[0]",
+            ),
+            ("fp_on_objects = [[\"chair\"]]", "detector.fp_on_objects[0]"),
+            (
+                "fp_on_objects = [[\"chair\", \"sofa\"]]",
+                "detector.fp_on_objects[0][1]",
+            ),
+        ] {
+            let e = Config::parse(f, &format!("[detector]\n{text}\n")).unwrap_err();
+            assert_eq!(e.key(), key, "{text}: {e}");
+        }
         let e =
             Config::parse(f, "[robot]\npitch_min_deg = 30.0\npitch_max_deg = 20.0\n").unwrap_err();
         assert_eq!(e.key(), "robot.pitch_max_deg");
