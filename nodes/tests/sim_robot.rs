@@ -74,7 +74,12 @@ fn the_robot_reaches_a_reachable_goal_around_the_desk() {
     );
     let t = r.sim.true_state();
     let est_err = (t.base_pose[0] - s.base_pose[0]).hypot(t.base_pose[1] - s.base_pose[1]);
-    assert!(est_err < 0.1, "estimate {:?} vs true {:?}", s.base_pose, t.base_pose);
+    assert!(
+        est_err < 0.1,
+        "estimate {:?} vs true {:?}",
+        s.base_pose,
+        t.base_pose
+    );
     let err = ((t.base_pose[0] + 3.4).powi(2) + t.base_pose[1].powi(2)).sqrt();
     assert!(err < 0.3, "true pose {:?} is {err} m off", t.base_pose);
     // It drove around the desk (1.6 m deep): longer than the 3.4 m straight line.

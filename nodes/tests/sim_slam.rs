@@ -84,7 +84,11 @@ fn a_tour_has_orb_slam2_class_ate_and_no_pull_to_the_truth() {
         assert!(slam.corrections() > 20, "{}", slam.corrections());
         // No pull to the truth: the error grows between corrections and does not die out.
         let grew = e.windows(2).filter(|w| w[1] > w[0]).count();
-        assert!(grew > e.len() / 4, "error grew in {grew} of {} frames", e.len());
+        assert!(
+            grew > e.len() / 4,
+            "error grew in {grew} of {} frames",
+            e.len()
+        );
         let late = rmse(&e[e.len() * 2 / 3..]);
         assert!(late > 0.01, "seed {seed}: late ATE {late}");
     }
@@ -195,11 +199,7 @@ fn the_neck_yaw_in_the_camera_pose_carries_encoder_noise() {
         sd.to_degrees()
     );
     // robot.neck_encoder_noise_deg = 0.3 (interpolation of two readings averages a little).
-    assert!(
-        (0.1..0.6).contains(&sd.to_degrees()),
-        "{}",
-        sd.to_degrees()
-    );
+    assert!((0.1..0.6).contains(&sd.to_degrees()), "{}", sd.to_degrees());
     assert!(diffs.iter().all(|x| x.to_degrees().abs() < 3.0));
     // The state reports the encoder reading too, not the true neck yaw.
     assert!(reported.iter().all(|&x| x != 0.0));

@@ -366,8 +366,14 @@ impl SlamConfig {
         for (key, value, hi) in keys {
             c.in_range(&format!("robot.slam.{key}"), value.into(), 0.0, hi)?;
         }
-        c.positive("robot.slam.keyframe_distance_m", self.keyframe_distance_m.into())?;
-        c.positive("robot.slam.keyframe_angle_deg", self.keyframe_angle_deg.into())?;
+        c.positive(
+            "robot.slam.keyframe_distance_m",
+            self.keyframe_distance_m.into(),
+        )?;
+        c.positive(
+            "robot.slam.keyframe_angle_deg",
+            self.keyframe_angle_deg.into(),
+        )?;
         c.count(
             "robot.slam.max_keyframes",
             self.max_keyframes as usize,

@@ -43,11 +43,11 @@ pub use detector::Detector;
 pub use localization::Localization;
 pub use nav::{GridTooLarge, NavGrid, NavRefusal};
 pub use robot::Robot;
-pub use slam::{PoseDelay, SlamEstimator, SlamEvent};
 pub use scene::{
     BUILTIN_SCENES, OVERLAP_TOLERANCE, Room, SUPPORT_TOLERANCE, Scene, SceneError, SceneObject,
     Shape,
 };
+pub use slam::{PoseDelay, SlamEstimator, SlamEvent};
 pub use world::{Hit, STRUCTURE, World};
 
 use crate::geom::{CameraMount, affine_to_pose};

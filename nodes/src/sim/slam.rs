@@ -184,7 +184,13 @@ impl SlamEstimator {
     /// One frame's visual update: `tracking` is the failure model's verdict for the frame,
     /// `base` the TRUE base pose, `camera_yaw` the TRUE camera yaw (base + neck), `travel` the
     /// base's total driven distance (m).
-    pub fn frame(&mut self, tracking: bool, base: [f32; 3], camera_yaw: f32, travel: f32) -> SlamEvent {
+    pub fn frame(
+        &mut self,
+        tracking: bool,
+        base: [f32; 3],
+        camera_yaw: f32,
+        travel: f32,
+    ) -> SlamEvent {
         let was = std::mem::replace(&mut self.tracking, tracking);
         if !tracking {
             return SlamEvent::None;
@@ -407,7 +413,10 @@ mod tests {
         assert!(s.covariance()[(1, 2)].abs() > 0.0);
         // 0.4 m driven (true pose agrees): a keyframe correction.
         let before = *s.covariance();
-        assert_eq!(s.frame(true, [0.4, 0.0, 0.0], 0.0, 0.4), SlamEvent::Keyframe);
+        assert_eq!(
+            s.frame(true, [0.4, 0.0, 0.0], 0.0, 0.4),
+            SlamEvent::Keyframe
+        );
         let after = s.covariance();
         for i in 0..3 {
             assert!(after[(i, i)] < before[(i, i)], "{i}: {after} vs {before}");
