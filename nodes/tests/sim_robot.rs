@@ -65,11 +65,21 @@ fn the_robot_reaches_a_reachable_goal_around_the_desk() {
     let s = r.run(120.0, |s| s.nav_status != nav_status::MOVING);
     assert_eq!(s.nav_status, nav_status::REACHED, "{s:?}");
     assert_eq!(s.nav_goal_id, 1);
+    // The estimate is where the goal was reached (0.05 m) plus any SLAM correction since: the
+    // camera turns back to the desk at the goal, tracking recovers and the relocalization moves
+    // the estimate (seed 3: 7.8 cm), as on a real robot.
     assert!(
-        (s.base_pose[0] + 3.4).abs() < 0.06 && s.base_pose[1].abs() < 0.06,
+        (s.base_pose[0] + 3.4).abs() < 0.15 && s.base_pose[1].abs() < 0.15,
         "{s:?}"
     );
     let t = r.sim.true_state();
+    let est_err = (t.base_pose[0] - s.base_pose[0]).hypot(t.base_pose[1] - s.base_pose[1]);
+    assert!(
+        est_err < 0.1,
+        "estimate {:?} vs true {:?}",
+        s.base_pose,
+        t.base_pose
+    );
     let err = ((t.base_pose[0] + 3.4).powi(2) + t.base_pose[1].powi(2)).sqrt();
     assert!(err < 0.3, "true pose {:?} is {err} m off", t.base_pose);
     // It drove around the desk (1.6 m deep): longer than the 3.4 m straight line.

@@ -342,10 +342,16 @@ pub struct RobotConfig {
     pub odom_rot_per_m: f32,
     /// Odometry noise multiplier while visual localization is lost.
     pub lost_drift_factor: f32,
-    /// Rate (1/s) at which visual localization pulls the estimate back to the truth while tracking.
-    pub slam_correction_rate: f32,
+    /// Constant neck-encoder offset σ (drawn once per seed), degrees.
+    pub neck_encoder_bias_deg: f32,
+    /// Neck-encoder noise σ per reading, degrees.
+    pub neck_encoder_noise_deg: f32,
+    /// A frame's `camera_pose` is the estimate from this long before the image, milliseconds.
+    pub pose_delay_ms: f32,
     /// Integration substep, seconds.
     pub substep_s: f32,
+    /// `[robot.slam]`: the visual-SLAM estimate (keyframe corrections, map drift, loops).
+    pub slam: SlamConfig,
 }
 
 impl Default for RobotConfig {
@@ -417,12 +423,95 @@ impl RobotConfig {
             100.0,
         )?;
         c.in_range(
-            "robot.slam_correction_rate",
-            self.slam_correction_rate.into(),
+            "robot.neck_encoder_bias_deg",
+            self.neck_encoder_bias_deg.into(),
             0.0,
-            1000.0,
+            10.0,
         )?;
-        c.in_range("robot.substep_s", self.substep_s.into(), 0.0001, 0.1)
+        c.in_range(
+            "robot.neck_encoder_noise_deg",
+            self.neck_encoder_noise_deg.into(),
+            0.0,
+            10.0,
+        )?;
+        c.in_range(
+            "robot.pose_delay_ms",
+            self.pose_delay_ms.into(),
+            0.0,
+            super::slam::MAX_DELAY_MS,
+        )?;
+        c.in_range("robot.substep_s", self.substep_s.into(), 0.0001, 0.1)?;
+        self.slam.validate(c)
+    }
+}
+
+/// `[robot.slam]` section: the visual-SLAM pose estimate (see `sim::slam`).
+#[derive(Debug, Clone, PartialEq, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct SlamConfig {
+    /// A keyframe (and its correction) after the camera moved this far from the reference keyframe, m.
+    pub keyframe_distance_m: f32,
+    /// ... or turned this far, degrees.
+    pub keyframe_angle_deg: f32,
+    /// σ per axis of the position residual a keyframe correction leaves, metres.
+    pub residual_xy_m: f32,
+    /// σ of the yaw residual a keyframe correction leaves, degrees.
+    pub residual_yaw_deg: f32,
+    /// Map drift: σ per axis of the map's position error per √m of newly mapped camera travel, m.
+    pub map_drift_xy_m: f32,
+    /// Map drift: σ of the map's yaw error per √m of newly mapped camera travel, degrees.
+    pub map_drift_yaw_deg: f32,
+    /// Camera rotation counts as this many metres of travel per radian for the map drift.
+    pub turn_equiv_m_per_rad: f32,
+    /// A keyframe is reused (no new map) when the camera is within this distance of it, m ...
+    pub reuse_radius_m: f32,
+    /// ... and this angle of its viewing direction, degrees.
+    pub reuse_angle_deg: f32,
+    /// Reusing a keyframe made at least this much base travel earlier is a loop closure, m.
+    pub loop_min_travel_m: f32,
+    /// Keyframes kept (storage preallocated; later places are not stored).
+    pub max_keyframes: u32,
+}
+
+impl Default for SlamConfig {
+    /// The `[robot.slam]` section of the built-in `config/default.toml`.
+    fn default() -> Self {
+        runtime::config::DEFAULTS.section("robot.slam")
+    }
+}
+
+impl SlamConfig {
+    /// Range-check.
+    pub fn validate(&self, c: &Checker) -> Result<(), ConfigError> {
+        let keys: [(&str, f32, f64); 10] = [
+            ("keyframe_distance_m", self.keyframe_distance_m, 10.0),
+            ("keyframe_angle_deg", self.keyframe_angle_deg, 180.0),
+            ("residual_xy_m", self.residual_xy_m, 1.0),
+            ("residual_yaw_deg", self.residual_yaw_deg, 45.0),
+            ("map_drift_xy_m", self.map_drift_xy_m, 1.0),
+            ("map_drift_yaw_deg", self.map_drift_yaw_deg, 45.0),
+            ("turn_equiv_m_per_rad", self.turn_equiv_m_per_rad, 10.0),
+            ("reuse_radius_m", self.reuse_radius_m, 10.0),
+            ("reuse_angle_deg", self.reuse_angle_deg, 180.0),
+            ("loop_min_travel_m", self.loop_min_travel_m, 1000.0),
+        ];
+        for (key, value, hi) in keys {
+            c.in_range(&format!("robot.slam.{key}"), value.into(), 0.0, hi)?;
+        }
+        c.positive(
+            "robot.slam.keyframe_distance_m",
+            self.keyframe_distance_m.into(),
+        )?;
+        c.positive(
+            "robot.slam.keyframe_angle_deg",
+            self.keyframe_angle_deg.into(),
+        )?;
+        c.count(
+            "robot.slam.max_keyframes",
+            self.max_keyframes as usize,
+            1,
+            100_000,
+        )
     }
 }
 
@@ -472,5 +561,9 @@ mod tests {
         assert_eq!(e.key(), "robot.pitch_max_deg");
         let e = Config::parse(f, "[robot]\nspeed = 1.0\n").unwrap_err();
         assert_eq!(e.key(), "robot.speed", "{e}");
+        let e = Config::parse(f, "[robot.slam]\nresidual_xy_m = -0.1\n").unwrap_err();
+        assert_eq!(e.key(), "robot.slam.residual_xy_m", "{e}");
+        let e = Config::parse(f, "[robot]\npose_delay_ms = 1000.0\n").unwrap_err();
+        assert_eq!(e.key(), "robot.pose_delay_ms", "{e}");
     }
 }

@@ -37,11 +37,12 @@ mod localization;
 mod nav;
 mod robot;
 mod scene;
+mod slam;
 mod world;
 
 pub use artefacts::DepthArtefacts;
 pub use camera::{DepthCamera, RenderBuffers};
-pub use config::{DetectorConfig, RobotConfig, SimConfig};
+pub use config::{DetectorConfig, RobotConfig, SimConfig, SlamConfig};
 pub use detector::Detector;
 pub use localization::Localization;
 pub use nav::{GridTooLarge, NavGrid, NavRefusal};
@@ -50,6 +51,7 @@ pub use scene::{
     BUILTIN_SCENES, Material, OVERLAP_TOLERANCE, Room, SUPPORT_TOLERANCE, Scene, SceneError,
     SceneObject, Shape,
 };
+pub use slam::{PoseDelay, SlamEstimator, SlamEvent};
 pub use world::{Hit, STRUCTURE, World};
 
 use crate::geom::{CameraMount, affine_to_pose};
@@ -215,7 +217,8 @@ impl Sim {
 
     /// Render a depth frame and detections from the current TRUE camera pose, in place (the
     /// outputs may be loaned shared-memory samples). Fills sizes, intrinsics, `camera_pose`
-    /// (from the ESTIMATED base pose), headers (`seq` = frame number from 1, `stamp_ns` and
+    /// (the ESTIMATED base pose and neck-encoder reading from `robot.pose_delay_ms` earlier),
+    /// headers (`seq` = frame number from 1, `stamp_ns` and
     /// `sim_time_ns` = `now_ns`; a host may overwrite `stamp_ns`/`seq`, keeping
     /// `dets.frame_seq` equal to the frame's `seq`) and updates the localization model.
     /// The depth carries the camera's noise and then the [`DepthArtefacts`]; the ground truth
@@ -225,7 +228,8 @@ impl Sim {
         let cam = *self.camera.camera();
         let r = &self.robot;
         let true_pose = self.camera_pose(r.true_pose);
-        let est_pose = self.camera_pose(r.est_pose);
+        let (est_base, est_neck) = r.stamped_pose();
+        let est_pose = self.mount.camera_pose(est_base, est_neck, r.neck_pitch);
         self.frames += 1;
         frame.header.seq = self.frames;
         frame.header.stamp_ns = now_ns;
@@ -248,7 +252,7 @@ impl Sim {
             self.robot.distance_true,
             self.time_ns,
         );
-        self.robot.localized = self.loc.is_ok();
+        self.robot.visual_update(self.loc.is_ok());
         let (detector, instance) = (&mut self.detector, &self.buf.instance);
         pool.install(|| detector.detect(instance, &cam, &true_pose, frames, dets));
         dets.header = frame.header;
@@ -261,10 +265,14 @@ impl Sim {
             .camera_pose(base, self.robot.neck_yaw, self.robot.neck_pitch)
     }
 
-    /// The robot's state as it believes it (estimated pose, odometry covariance), for
-    /// `robot/state`. Header: `sim_time_ns` = `stamp_ns` = simulated time; `seq` is the host's.
+    /// The robot's state as it believes it (estimated pose and its covariance, neck-encoder
+    /// reading), for `robot/state`. Header: `sim_time_ns` = `stamp_ns` = simulated time; `seq`
+    /// is the host's.
     pub fn robot_state(&self, out: &mut RobotState) {
-        self.fill_state(out, self.robot.est_pose, self.robot.distance_est);
+        let r = &self.robot;
+        self.fill_state(out, r.est_pose(), r.distance_est);
+        out.neck_yaw = r.neck_yaw_measured();
+        out.odom_cov = r.slam().covariance_f32();
     }
 
     /// The true state (same type; ground truth for evaluation and recording only).
@@ -284,9 +292,6 @@ impl Sim {
         out.neck_yaw = r.neck_yaw;
         out.neck_pitch = r.neck_pitch;
         out.odom_cov = [0.0; 9];
-        out.odom_cov[0] = r.variance[0];
-        out.odom_cov[4] = r.variance[1];
-        out.odom_cov[8] = r.variance[2];
         out.speed = r.speed;
         out.distance_m = distance;
         out.localization_ok = u8::from(self.loc.is_ok());
@@ -321,6 +326,11 @@ impl Sim {
     /// The localization model (feature tracking and failure count).
     pub fn localization(&self) -> &Localization {
         &self.loc
+    }
+
+    /// The visual-SLAM pose estimator (corrections, loop closures, relocalizations).
+    pub fn slam(&self) -> &SlamEstimator {
+        self.robot.slam()
     }
 
     /// The latest render's scratch images (instance ids, noise-free depth; ground truth).

@@ -1,13 +1,17 @@
-//! The robot: a differential base following A* paths, a 360° neck, odometry with drift.
+//! The robot: a differential base following A* paths, a 360° neck with a noisy encoder, and a
+//! visual-SLAM pose estimate.
 //!
 //! The base controller works on the ESTIMATED pose (as a real robot would); the true pose moves
 //! by the commanded velocities. Odometry measures each motion with noise (σ² proportional to
 //! the distance driven and the angle turned, multiplied while visual localization is lost) and
-//! integrates it into the estimate; while localization tracks, the estimate is pulled back
-//! toward the truth at `slam_correction_rate` (the SLAM correction).
+//! feeds it to the [`SlamEstimator`]'s prediction; [`Robot::visual_update`] (once per frame)
+//! applies its keyframe, loop-closure and relocalization corrections. The neck encoder reads the
+//! true neck yaw plus a per-seed offset and per-reading noise; [`PoseDelay`] keeps the recent
+//! estimates so that a frame is stamped with the pose from `pose_delay_ms` earlier.
 
 use super::config::RobotConfig;
 use super::nav::{NavGrid, NavRefusal};
+use super::slam::{PoseDelay, SlamEstimator, SlamEvent};
 use crate::geom::wrap_angle;
 use glam::Vec2;
 use rand::Rng;
@@ -30,8 +34,16 @@ pub struct Robot {
     yaw_tol: f32,
     /// True base pose `[x, y, yaw]`.
     pub(crate) true_pose: [f32; 3],
-    /// Estimated base pose `[x, y, yaw]`.
-    pub(crate) est_pose: [f32; 3],
+    /// The visual-SLAM estimate of the base pose.
+    slam: SlamEstimator,
+    /// Recent `[x, y, yaw, measured neck yaw]` for the frames' delayed stamps.
+    history: PoseDelay,
+    /// Simulated time of this robot, s.
+    time_s: f64,
+    /// Constant neck-encoder offset, rad.
+    encoder_bias: f32,
+    /// Neck-encoder noise σ, rad.
+    encoder_noise: f32,
     /// Neck yaw relative to the base, rad.
     pub(crate) neck_yaw: f32,
     /// Camera pitch, rad, positive down.
@@ -45,8 +57,6 @@ pub struct Robot {
     pub(crate) distance_true: f32,
     /// Distance driven (odometry), m.
     pub(crate) distance_est: f32,
-    /// Variance of the estimate `[x, y, yaw]`.
-    pub(crate) variance: [f32; 3],
     /// Current goal id (0 = none).
     pub(crate) goal_id: u64,
     /// One of `nav_status`.
@@ -58,6 +68,7 @@ pub struct Robot {
     rng: Pcg64,
     /// Whether visual localization currently tracks.
     pub(crate) localized: bool,
+    encoder: Pcg64,
 }
 
 impl Robot {
@@ -69,6 +80,12 @@ impl Robot {
             cfg.pitch_max_deg.to_radians(),
         );
         let pitch = pitch.clamp(pitch_range.0, pitch_range.1);
+        let mut encoder = Pcg64::new(
+            super::mix(seed, &[0x6e65_636b]) as u128,
+            0x0e4c_0de5_0000_0000_0000_0000_0000_0001,
+        );
+        let encoder_bias =
+            cfg.neck_encoder_bias_deg.to_radians() * encoder.sample::<f32, _>(StandardNormal);
         Self {
             cfg: cfg.clone(),
             max_turn: cfg.max_turn_rate_deg_s.to_radians(),
@@ -76,7 +93,14 @@ impl Robot {
             pitch_range,
             yaw_tol: cfg.yaw_tolerance_deg.to_radians(),
             true_pose: start,
-            est_pose: start,
+            slam: SlamEstimator::new(&cfg.slam, start, seed),
+            history: PoseDelay::new(
+                [start[0], start[1], start[2], encoder_bias],
+                cfg.pose_delay_ms,
+            ),
+            time_s: 0.0,
+            encoder_bias,
+            encoder_noise: cfg.neck_encoder_noise_deg.to_radians(),
             neck_yaw: 0.0,
             neck_pitch: pitch,
             neck_goal: (0.0, pitch),
@@ -84,7 +108,6 @@ impl Robot {
             camera_turn_rate: 0.0,
             distance_true: 0.0,
             distance_est: 0.0,
-            variance: [0.0; 3],
             goal_id: 0,
             status: nav_status::IDLE,
             refusal: None,
@@ -96,7 +119,44 @@ impl Robot {
                 0xcafe_f00d_d15e_a5e5_0000_0000_0000_0001,
             ),
             localized: true,
+            encoder,
         }
+    }
+
+    /// The estimated base pose `[x, y, yaw]` (now).
+    pub fn est_pose(&self) -> [f32; 3] {
+        self.slam.pose()
+    }
+
+    /// The pose estimator.
+    pub fn slam(&self) -> &SlamEstimator {
+        &self.slam
+    }
+
+    /// The latest neck-encoder reading (true neck yaw + offset + noise), rad.
+    pub fn neck_yaw_measured(&self) -> f32 {
+        self.history.latest()[3]
+    }
+
+    /// The estimated base pose and neck-encoder reading `pose_delay_ms` ago: what a frame
+    /// rendered now is stamped with.
+    pub fn stamped_pose(&self) -> ([f32; 3], f32) {
+        let [x, y, yaw, neck] = self.history.delayed();
+        ([x, y, yaw], neck)
+    }
+
+    /// A frame's visual update: `tracking` is the failure model's verdict for it. Applies the
+    /// estimator's keyframe / loop-closure / relocalization correction, if one is due.
+    pub fn visual_update(&mut self, tracking: bool) -> SlamEvent {
+        self.localized = tracking;
+        let camera_yaw = wrap_angle(self.true_pose[2] + self.neck_yaw);
+        let event = self
+            .slam
+            .frame(tracking, self.true_pose, camera_yaw, self.distance_true);
+        if event != SlamEvent::None {
+            self.history.correct_latest(self.slam.pose());
+        }
+        event
     }
 
     /// Why the current goal was refused or abandoned, if it was.
@@ -115,7 +175,8 @@ impl Robot {
         self.path.clear();
         self.waypoint = 0;
         let [x, y, yaw] = goal.pose;
-        let start = Vec2::new(self.est_pose[0], self.est_pose[1]);
+        let [x0, y0, _] = self.est_pose();
+        let start = Vec2::new(x0, y0);
         match grid.plan(start, Vec2::new(x, y)) {
             Ok(path) => {
                 self.path = path;
@@ -150,6 +211,11 @@ impl Robot {
             let h = left.min(self.cfg.substep_s);
             turned += self.substep(h, collision);
             left -= h;
+            self.time_s += f64::from(h);
+            let noise: f32 = self.encoder.sample(StandardNormal);
+            let neck = wrap_angle(self.neck_yaw + self.encoder_bias + self.encoder_noise * noise);
+            let [x, y, yaw] = self.slam.pose();
+            self.history.record(self.time_s, [x, y, yaw, neck]);
         }
         if dt > 0.0 {
             self.camera_turn_rate = turned / dt;
@@ -186,7 +252,7 @@ impl Robot {
         };
         self.speed = v;
         self.distance_true += (v * dt).abs();
-        self.odometry(v * dt, w * dt, dt);
+        self.odometry(v * dt, w * dt);
         w * dt + d_neck
     }
 
@@ -195,7 +261,7 @@ impl Robot {
         if self.status != nav_status::MOVING {
             return (0.0, 0.0);
         }
-        let [x, y, yaw] = self.est_pose;
+        let [x, y, yaw] = self.est_pose();
         let here = Vec2::new(x, y);
         let turn = |err: f32, max: f32| (2.0 * err).clamp(-max, max);
         while self.waypoint < self.path.len() {
@@ -225,9 +291,9 @@ impl Robot {
         (0.0, turn(err, self.max_turn))
     }
 
-    /// Odometry: integrate the noisy measurement of a motion `(dd, dθ)` into the estimate, then
-    /// apply the SLAM correction if localized.
-    fn odometry(&mut self, dd: f32, dth: f32, dt: f32) {
+    /// Odometry: the noisy measurement of a motion `(dd, dθ)` drives the estimator's
+    /// prediction (noise scaled by `lost_drift_factor` while localization is lost).
+    fn odometry(&mut self, dd: f32, dth: f32) {
         let f = if self.localized {
             1.0
         } else {
@@ -244,28 +310,7 @@ impl Robot {
         let md = dd + var_d.sqrt() * n1;
         let mth = dth + var_th.sqrt() * n2;
         self.distance_est += md.abs();
-        let [x, y, yaw] = self.est_pose;
-        let mid = yaw + 0.5 * mth;
-        self.est_pose = [
-            x + md * mid.cos(),
-            y + md * mid.sin(),
-            wrap_angle(yaw + mth),
-        ];
-        let vy = self.variance[2];
-        self.variance[0] += var_d + dd * dd * vy;
-        self.variance[1] += var_d + dd * dd * vy;
-        self.variance[2] += var_th;
-
-        if self.localized && c.slam_correction_rate > 0.0 {
-            let a = 1.0 - (-c.slam_correction_rate * dt).exp();
-            let t = self.true_pose;
-            let e = &mut self.est_pose;
-            e[0] += a * (t[0] - e[0]);
-            e[1] += a * (t[1] - e[1]);
-            e[2] = wrap_angle(e[2] + a * wrap_angle(t[2] - e[2]));
-            for v in &mut self.variance {
-                *v *= (1.0 - a) * (1.0 - a);
-            }
-        }
+        self.slam
+            .predict(md.into(), mth.into(), var_d.into(), var_th.into());
     }
 }
