@@ -33,6 +33,7 @@ mod detector;
 mod localization;
 mod nav;
 mod robot;
+mod rowcast;
 mod scene;
 mod world;
 
