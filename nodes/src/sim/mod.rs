@@ -36,6 +36,7 @@ mod detector;
 mod localization;
 mod nav;
 mod robot;
+mod rowcast;
 mod scene;
 mod slam;
 mod world;

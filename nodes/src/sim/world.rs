@@ -101,6 +101,11 @@ impl World {
         })
     }
 
+    /// The solid of scene object `k`, in its frame ([`World::object_pose`]).
+    pub(crate) fn object_shape(&self, k: usize) -> &SolidShape {
+        &self.prims[k].shape
+    }
+
     /// `world_from_object` pose of scene object `k` (parry frame: a cylinder's axis is local y).
     pub fn object_pose(&self, k: usize) -> &Pose {
         &self.prims[k].pose
@@ -143,6 +148,11 @@ impl World {
                 cast_cylinder(s, local, max_t).map(|h| (h.time_of_impact, h.normal))
             }
         }
+    }
+
+    /// The room's inside as the box `(min, max)`, world frame (floor at z = 0).
+    pub fn room_bounds(&self) -> (Vec3, Vec3) {
+        (self.room_min, self.room_max)
     }
 
     /// Where a ray from inside the room leaves it (floor, ceiling or a wall), as `(t, inward
