@@ -163,7 +163,8 @@ fn frame_with(
 ) {
     let cam = camera();
     let mut rng = Pcg64::seed_from_u64(k);
-    let target = Vec3::new(0.5, 0.0, 0.8);
+    // Views of the table's front (the suitcase stands at its corner) from 1.3 m.
+    let target = Vec3::new(0.6, -0.2, 0.6);
     let pose = view(target, 1.3, deg);
     let opts = RenderOpts {
         boxes: true,
@@ -233,7 +234,7 @@ fn a_false_positive_seen_once_is_gone_after_five_squarely_missed_views() {
             frame_with(
                 &scene,
                 k,
-                (k as f32 - 4.0) * 5.0,
+                (k as f32 - 4.0) * 10.0,
                 None,
                 Some("suitcase"),
                 &mut frame,
@@ -268,7 +269,7 @@ fn a_real_object_missed_in_one_of_three_frames_survives() {
         frame_with(
             &scene,
             k,
-            (k as f32 - 6.0) * 4.0,
+            (k as f32 - 6.0) * 10.0,
             None,
             drop,
             &mut frame,

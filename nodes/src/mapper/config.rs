@@ -148,6 +148,11 @@ pub struct ExistenceConfig {
     /// A sample point is occluded when the frame's depth is nearer than its expected depth by
     /// more than this, metres.
     pub occlusion_tolerance: f32,
+    /// Evidence is taken once per viewpoint: an object's existence changes only when the camera
+    /// moved at least this far (m) since its last change ...
+    pub min_view_change: f32,
+    /// ... or the direction from the object to the camera turned by at least this (degrees).
+    pub min_view_angle_deg: f32,
     /// A missed object overlapped (box IoU) this much by a detection of a compatible class that
     /// was not associated with it is not counted as missed.
     pub overlap_iou: f32,

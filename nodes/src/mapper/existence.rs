@@ -15,7 +15,11 @@
 //!   went elsewhere (or was refused) overlaps its projected box (IoU ≥ `overlap_iou`): nearby
 //!   objects merged into one box, a jittered box failing the test.
 //!
-//! `l` is clamped to `±max_log_odds`; an object below `delete_below` is deleted.
+//! A detector's misses are not independent between nearby views (10 Hz frames of one scene, a
+//! persistent per-direction failure), so evidence is taken once per viewpoint: an object's `l`
+//! changes only when the camera moved `min_view_change` or turned `min_view_angle_deg` around the
+//! object since its last change. `l` is clamped to `±max_log_odds`; an object below
+//! `delete_below` is deleted.
 
 use super::Mapper;
 use super::cuboid::Box3;
@@ -103,6 +107,8 @@ impl Mapper {
         let cam_from_world = pose.inverse();
         let scale = (camera.width * camera.height) as f32 / (640.0 * 480.0);
         let min_px = e.min_box_px * scale;
+        let cam_pos: Vec3 = pose.translation.into();
+        let cos_min = e.min_view_angle_deg.to_radians().cos();
         let mut deleted = 0;
         let mut k = 0;
         while k < self.objects.len() {
@@ -124,7 +130,15 @@ impl Mapper {
             };
             let o = &mut self.objects[k];
             o.hit = false;
-            o.existence = (o.existence + delta).clamp(-e.max_log_odds, e.max_log_odds);
+            let new_view = o.last_view.is_none_or(|p| {
+                let (a, b) = (p - o.cuboid.center, cam_pos - o.cuboid.center);
+                p.distance(cam_pos) >= e.min_view_change
+                    || a.normalize_or_zero().dot(b.normalize_or_zero()) <= cos_min
+            });
+            if delta != 0.0 && new_view {
+                o.last_view = Some(cam_pos);
+                o.existence = (o.existence + delta).clamp(-e.max_log_odds, e.max_log_odds);
+            }
             if o.existence < e.delete_below {
                 self.objects.remove(k);
                 deleted += 1;

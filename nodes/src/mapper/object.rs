@@ -76,6 +76,8 @@ pub struct MappedObject {
     pub existence: f32,
     /// Associated with a detection in the current frame.
     pub hit: bool,
+    /// Camera position of the newest existence update.
+    pub last_view: Option<Vec3>,
 }
 
 impl MappedObject {
@@ -113,6 +115,7 @@ impl MappedObject {
             point_count: 0,
             existence: 0.0,
             hit: false,
+            last_view: None,
         }
     }
 
