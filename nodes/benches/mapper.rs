@@ -1,6 +1,7 @@
 //! Mapper benchmark: one 640 × 480 frame with 10 visible objects (a table and nine objects on
 //! it) — point extraction, association, cuboid fits and SOPM updates — on a warmed-up map.
-//! Also `write_map` into a heap ObjectMap. Target: integrate ≤ 10 ms.
+//! Also `write_map` into a heap ObjectMap. Target: integrate ≤ 10 ms. Run with instance masks
+//! and with box-only detections (box segmentation).
 
 #[path = "../tests/mapper_common/mod.rs"]
 mod mapper_common;
@@ -16,7 +17,17 @@ use shm_types::{DepthFrame, Detections, ObjectMap, RobotState, boxed_zeroed};
 use std::hint::black_box;
 
 fn bench(c: &mut Criterion) {
+    run(c, false);
+    run(c, true);
+}
+
+fn run(c: &mut Criterion, boxes: bool) {
     let scene = busy_scene();
+    let opts = RenderOpts {
+        boxes,
+        ..Default::default()
+    };
+    let suffix = if boxes { "_boxes" } else { "" };
     let camera = CameraConfig::default().camera();
     let mount = CameraMount::default();
     let mut mapper = Mapper::new(&MapperConfig::default(), &camera).expect("default config");
@@ -38,7 +49,7 @@ fn bench(c: &mut Criterion) {
             &pose,
             k + 1,
             k * 33_000_000,
-            &RenderOpts::default(),
+            &opts,
             &mut rng,
             &mut frame,
             &mut dets,
@@ -48,19 +59,22 @@ fn bench(c: &mut Criterion) {
         }
     }
     println!("visible detections in the benchmark frame: {}", dets.count);
-    c.bench_function("mapper_integrate_10_objects_640x480", |b| {
-        b.iter_batched(
-            || mapper.clone(),
-            |mut m| {
-                black_box(m.integrate(&frame, &dets, &state).expect("frame"));
-                m
-            },
-            BatchSize::LargeInput,
-        )
-    });
+    c.bench_function(
+        &format!("mapper_integrate_10_objects_640x480{suffix}"),
+        |b| {
+            b.iter_batched(
+                || mapper.clone(),
+                |mut m| {
+                    black_box(m.integrate(&frame, &dets, &state).expect("frame"));
+                    m
+                },
+                BatchSize::LargeInput,
+            )
+        },
+    );
     mapper.integrate(&frame, &dets, &state).expect("frame");
     let mut map = boxed_zeroed::<ObjectMap>();
-    c.bench_function("mapper_write_map", |b| {
+    c.bench_function(&format!("mapper_write_map{suffix}"), |b| {
         b.iter(|| mapper.write_map(black_box(&mut map), 0))
     });
 }

@@ -1,9 +1,10 @@
 //! Association of a new observation with the map's objects (paper §4.3).
 //!
 //! A detection's cleaned points `P` may join object `O` when
-//! 1. the classes are compatible: equal, or both in one confusable group (cup/bottle/vase,
-//!    book/keyboard); a confusable match adds a class vote and the object's class is the majority;
-//!    background never matches foreground;
+//! 1. the classes are compatible: equal, or both in one look-alike group of
+//!    `[mapper.association] lookalike` (the mapper's own setting; `[]` = the label must match, as
+//!    in the paper); a look-alike match adds a class vote and the object's class is the majority
+//!    by summed score; background never matches foreground;
 //! 2. they overlap in 3D: the centroid of `P` lies in `O`'s cuboid grown by `gate_margin`, or
 //!    `O`'s centre lies in `P`'s bounding box grown by `gate_margin`;
 //! 3. the multivariate Wilcoxon rank-sum test ([`super::wilcoxon`]) does not reject "same
@@ -26,32 +27,31 @@
 //! compatible object's cuboid is treated as a rejected association of that object (its `C_asso`
 //! is updated, no duplicate object is created); otherwise it founds a new object.
 
+use glam::Vec3;
 use shm_types::{ClassId, class_id};
-
-/// Groups of classes a detector confuses with each other.
-const CONFUSABLE: [&[&str]; 2] = [&["cup", "bottle", "vase"], &["book", "keyboard"]];
+use std::collections::HashMap;
 
 /// Class compatibility table.
 #[derive(Debug, Clone)]
 pub struct ClassGroups {
-    group_of: Vec<u8>,
+    group_of: Vec<u16>,
 }
 
-impl Default for ClassGroups {
-    fn default() -> Self {
-        let mut group_of = vec![0u8; shm_types::COCO_CLASSES.len()];
-        for (g, names) in CONFUSABLE.iter().enumerate() {
-            for name in names.iter() {
+impl ClassGroups {
+    /// The table of look-alike groups (class names; unknown names are ignored — the config
+    /// validation refuses them).
+    pub fn new(groups: &[Vec<String>]) -> Self {
+        let mut group_of = vec![0u16; shm_types::COCO_CLASSES.len()];
+        for (g, names) in groups.iter().enumerate() {
+            for name in names {
                 if let Some(id) = class_id(name) {
-                    group_of[id as usize] = g as u8 + 1;
+                    group_of[id as usize] = g as u16 + 1;
                 }
             }
         }
         Self { group_of }
     }
-}
 
-impl ClassGroups {
     /// Whether an observation of class `a` may join an object of class `b`.
     pub fn compatible(&self, a: ClassId, b: ClassId) -> bool {
         if a == b {
@@ -95,19 +95,52 @@ pub fn assign(cands: &mut [Candidate], detections: usize, out: &mut Vec<Option<u
     }
 }
 
+/// Centroids of the occupied voxels of `pts` (edge `voxel`), in first-seen order.
+pub fn voxel_centroids(
+    pts: &[Vec3],
+    voxel: f32,
+    map: &mut HashMap<[i32; 3], (Vec3, u32)>,
+    out: &mut Vec<[f32; 3]>,
+) {
+    map.clear();
+    out.clear();
+    let inv = 1.0 / voxel;
+    let mut order: Vec<[i32; 3]> = Vec::new();
+    for p in pts {
+        let k = [
+            (p.x * inv).floor() as i32,
+            (p.y * inv).floor() as i32,
+            (p.z * inv).floor() as i32,
+        ];
+        let e = map.entry(k).or_insert_with(|| {
+            order.push(k);
+            (Vec3::ZERO, 0)
+        });
+        e.0 += *p;
+        e.1 += 1;
+    }
+    for k in order {
+        let (s, n) = map[&k];
+        out.push((s / n as f32).to_array());
+    }
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
 
     #[test]
-    fn confusable_groups() {
-        let g = ClassGroups::default();
+    fn lookalike_groups() {
+        let g = ClassGroups::new(&crate::mapper::AssociationConfig::default().lookalike);
         let id = |n| class_id(n).unwrap();
         assert!(g.compatible(id("cup"), id("vase")));
         assert!(g.compatible(id("book"), id("keyboard")));
         assert!(!g.compatible(id("cup"), id("book")));
         assert!(!g.compatible(id("chair"), id("dining table")));
         assert!(g.compatible(id("chair"), id("chair")));
+        let strict = ClassGroups::new(&[]);
+        assert!(!strict.compatible(id("cup"), id("vase")));
+        assert!(strict.compatible(id("cup"), id("cup")));
     }
 
     #[test]

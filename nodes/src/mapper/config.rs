@@ -1,5 +1,6 @@
 //! The `[mapper]` section of the configuration and its sub-sections (`[mapper.association]`,
-//! `[mapper.sopm]`, `[mapper.grid]`): one struct per table, defaults and range checks.
+//! `[mapper.extensions]`, `[mapper.existence]`, `[mapper.segmentation]`, `[mapper.sopm]`,
+//! `[mapper.grid]`): one struct per table, defaults and range checks.
 
 use super::sopm::{SopmParams, SopmShape};
 use runtime::config::{Checker, ConfigError};
@@ -50,8 +51,16 @@ pub struct MapperConfig {
     /// thin fragment split off an object's edge (mask bleed, grazing views) is still absorbed;
     /// keep it below the gap between neighbouring objects of one class (~5 cm on a desk).
     pub merge_margin: f32,
+    /// Detections scoring below this are ignored.
+    pub min_score: f32,
     /// Association.
     pub association: AssociationConfig,
+    /// Switches of the additions beyond the paper.
+    pub extensions: ExtensionsConfig,
+    /// Existence probability of objects (spurious object removal).
+    pub existence: ExistenceConfig,
+    /// Segmentation of an object's points inside a box (box-only detections).
+    pub segmentation: SegmentationConfig,
     /// Surface occupancy probability maps.
     pub sopm: SopmConfig,
     /// Exploration occupancy grid.
@@ -85,6 +94,99 @@ pub struct AssociationConfig {
     pub front_tolerance: f32,
     /// Growth of the detection box when selecting visible reference points, pixels.
     pub bbox_margin_px: f32,
+    /// Groups of look-alike class names: an observation may join an object of another class of
+    /// its group (class by score-weighted vote). `[]`: the label must match (the paper).
+    pub lookalike: Vec<Vec<String>>,
+}
+
+/// `[mapper.extensions]` section: each addition beyond the paper, on (`true`) or off.
+#[derive(Debug, Clone, PartialEq, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct ExtensionsConfig {
+    /// Merge duplicate objects after each frame.
+    pub duplicate_merge: bool,
+    /// A refused detection whose centroid lies inside a compatible object founds no new object.
+    pub inside_reject: bool,
+    /// Publish only objects seen `min_observations` times (off: from the first observation).
+    pub min_observations: bool,
+    /// Existence probability: objects that should have been seen but were not lose it and are
+    /// deleted ([`ExistenceConfig`]).
+    pub existence: bool,
+    /// Box-only detections: remove supporting planes, pick the depth cluster fitting the box and
+    /// the class size prior, reject outliers (off: the largest depth cluster of the box).
+    pub box_segmentation: bool,
+}
+
+impl Default for ExtensionsConfig {
+    /// The `[mapper.extensions]` section of the built-in `config/default.toml`.
+    fn default() -> Self {
+        runtime::config::DEFAULTS.section("mapper.extensions")
+    }
+}
+
+/// `[mapper.existence]` section: log-odds existence of each object.
+#[derive(Debug, Clone, PartialEq, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct ExistenceConfig {
+    /// Probability that an object in plain view is detected and associated (detector recall).
+    pub p_detect: f32,
+    /// Probability that a detection is associated with an object that does not exist.
+    pub p_false: f32,
+    /// An object whose log-odds fall below this is deleted.
+    pub delete_below: f32,
+    /// Log-odds are clamped to `±max_log_odds` (a long-seen object can still be removed).
+    pub max_log_odds: f32,
+    /// An object should be detected only if its projected box has at least this many pixels
+    /// (at 640 × 480; scaled with the image area).
+    pub min_box_px: f32,
+    /// ... and at least this fraction of its projected box lies in the image.
+    pub min_in_frame: f32,
+    /// ... and its centre is not farther than this from the camera, metres.
+    pub max_range: f32,
+    /// ... and at least this fraction of its camera-facing sample points is not occluded.
+    pub min_visible: f32,
+    /// A sample point is occluded when the frame's depth is nearer than its expected depth by
+    /// more than this, metres.
+    pub occlusion_tolerance: f32,
+    /// Evidence is taken once per viewpoint: an object's existence changes only when the camera
+    /// moved at least this far (m) since its last change ...
+    pub min_view_change: f32,
+    /// ... or the direction from the object to the camera turned by at least this (degrees).
+    pub min_view_angle_deg: f32,
+    /// A missed object overlapped (box IoU) this much by a detection of a compatible class that
+    /// was not associated with it is not counted as missed.
+    pub overlap_iou: f32,
+}
+
+impl Default for ExistenceConfig {
+    /// The `[mapper.existence]` section of the built-in `config/default.toml`.
+    fn default() -> Self {
+        runtime::config::DEFAULTS.section("mapper.existence")
+    }
+}
+
+/// `[mapper.segmentation]` section: an object's points inside a box.
+#[derive(Debug, Clone, Copy, PartialEq, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct SegmentationConfig {
+    /// Height-histogram bin, metres.
+    pub plane_bin: f32,
+    /// A horizontal plane needs this fraction of the box's points (within ± one bin).
+    pub plane_min_fraction: f32,
+    /// ... and, to be a support (removed with what lies under it), this fraction above it.
+    pub above_min_fraction: f32,
+    /// Plausible heights `[low, high]` of a table top, metres.
+    pub table_heights: [f32; 2],
+    /// Points farther from the cluster's median (horizontally) than this multiple of the class
+    /// prior's half diagonal are outliers.
+    pub outlier_factor: f32,
+}
+
+impl Default for SegmentationConfig {
+    /// The `[mapper.segmentation]` section of the built-in `config/default.toml`.
+    fn default() -> Self {
+        runtime::config::DEFAULTS.section("mapper.segmentation")
+    }
 }
 
 impl Default for AssociationConfig {
@@ -212,7 +314,100 @@ impl MapperConfig {
             0.0,
             1.0,
         )?;
+        c.in_range("mapper.min_score", self.min_score.into(), 0.0, 1.0)?;
+        let e = &self.existence;
+        c.require(
+            e.p_detect > e.p_false && e.p_detect < 1.0,
+            "mapper.existence.p_detect",
+            e.p_detect,
+            "must be in (p_false, 1)",
+        )?;
+        c.require(
+            e.p_false > 0.0 && e.p_false < 1.0,
+            "mapper.existence.p_false",
+            e.p_false,
+            "must be in (0, 1)",
+        )?;
+        c.in_range(
+            "mapper.existence.max_log_odds",
+            e.max_log_odds.into(),
+            0.1,
+            50.0,
+        )?;
+        c.require(
+            e.delete_below < 0.0 && e.delete_below > -e.max_log_odds,
+            "mapper.existence.delete_below",
+            e.delete_below,
+            "must be in (-max_log_odds, 0)",
+        )?;
+        c.in_range("mapper.existence.min_box_px", e.min_box_px.into(), 0.0, 1e6)?;
+        c.in_range(
+            "mapper.existence.min_in_frame",
+            e.min_in_frame.into(),
+            0.0,
+            1.0,
+        )?;
+        c.in_range("mapper.existence.max_range", e.max_range.into(), 0.1, 50.0)?;
+        c.in_range(
+            "mapper.existence.min_visible",
+            e.min_visible.into(),
+            0.0,
+            1.0,
+        )?;
+        c.in_range(
+            "mapper.existence.occlusion_tolerance",
+            e.occlusion_tolerance.into(),
+            0.0,
+            1.0,
+        )?;
+        c.in_range(
+            "mapper.existence.overlap_iou",
+            e.overlap_iou.into(),
+            0.0,
+            1.0,
+        )?;
+        let g = &self.segmentation;
+        c.in_range(
+            "mapper.segmentation.plane_bin",
+            g.plane_bin.into(),
+            0.002,
+            0.2,
+        )?;
+        c.in_range(
+            "mapper.segmentation.plane_min_fraction",
+            g.plane_min_fraction.into(),
+            0.0,
+            1.0,
+        )?;
+        c.in_range(
+            "mapper.segmentation.above_min_fraction",
+            g.above_min_fraction.into(),
+            0.0,
+            1.0,
+        )?;
+        c.require(
+            g.table_heights[0] >= 0.0 && g.table_heights[1] > g.table_heights[0],
+            "mapper.segmentation.table_heights",
+            format!("{:?}", g.table_heights),
+            "must be [low, high] with 0 <= low < high",
+        )?;
+        c.in_range(
+            "mapper.segmentation.outlier_factor",
+            g.outlier_factor.into(),
+            0.5,
+            100.0,
+        )?;
         let a = &self.association;
+        for (k, group) in a.lookalike.iter().enumerate() {
+            for name in group {
+                c.require(
+                    shm_types::class_id(name).is_some(),
+                    &format!("mapper.association.lookalike[{k}]"),
+                    name,
+                    "must be COCO class names",
+                )?;
+            }
+        }
         c.in_range("mapper.association.alpha", a.alpha, 0.0, 1.0)?;
         c.count(
             "mapper.association.max_test_points",

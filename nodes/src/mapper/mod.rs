@@ -7,10 +7,15 @@
 //! |---|---|
 //! | [`config`] | `[mapper]` configuration: [`MapperConfig`] and its sub-sections |
 //! | [`points`] | a detection's points: back-projection, cleaning, supporting planes |
+//! | [`segment`] | box-only detections: the object's points inside its box |
+//! | [`priors`] | class size priors (the mapper's own table) |
 //! | [`association`], [`wilcoxon`] | detection → object association (rank-sum test) |
 //! | [`object`] | one mapped object: merged cloud, cuboid, SOPM |
 //! | [`cuboid`] | cuboid fitting (minimum-area rectangle over the convex hull) |
 //! | [`sopm`] | surface occupancy probability maps |
+//! | [`existence`] | existence log-odds: spurious objects are deleted |
+//! | `merge.rs` | duplicate merging |
+//! | `publish.rs` | [`Mapper::write_map`], [`Mapper::write_grid`] |
 //! | [`grid`] | the exploration occupancy grid |
 //! | `mod.rs` | [`Mapper`]: the per-frame pipeline |
 //!
@@ -29,33 +34,49 @@
 //! detections first (their supporting planes then clean the foreground detections); each is
 //! associated ([`association`], [`wilcoxon`]) with an existing object or founds a new one; the
 //! object's cloud is merged (voxel centroids with mean lines of sight), its cuboid refitted
-//! ([`cuboid`]) and, for foreground objects, its SOPM updated ([`sopm`]).
+//! ([`cuboid`]) and, for foreground objects, its SOPM updated ([`sopm`]). Then the objects'
+//! existence is updated ([`existence`]) and duplicates are merged.
+//!
+//! Detections come as instance masks ([`shm_types::mask_mode::MASKS`]) or as boxes only
+//! ([`shm_types::mask_mode::BOXES`], a YOLO-class detector); for boxes the object is segmented
+//! out of its box ([`segment`]).
+//!
+//! **Paper-faithful mode.** Each addition beyond the paper has a switch in
+//! `[mapper.extensions]` (duplicate merging, "inside → reject", minimum observations, existence
+//! deletion, box segmentation) and look-alike classes are `[mapper.association] lookalike`
+//! (`[]`: the label must match). All off / `[]` is the paper's mapper.
 
 pub mod association;
 pub mod config;
 pub mod cuboid;
+pub mod existence;
 pub mod grid;
+mod merge;
 pub mod object;
 pub mod points;
+pub mod priors;
+mod publish;
+pub mod segment;
 pub mod sopm;
 pub mod wilcoxon;
 
 use crate::geom::{Camera, pose_to_affine};
+use association::voxel_centroids;
 use association::{Candidate, ClassGroups};
 use cuboid::CuboidScratch;
 use glam::{Affine3A, Vec3};
 use grid::ExplorationGrid;
 use object::{FitParams, MappedObject};
-use points::{ExtractParams, PointScratch, SupportPlane};
+use points::{ExtractParams, PointScratch, SupportPlane, rest_on_support};
 use runtime::config::{Checker, ConfigError};
-use shm_types::{
-    DepthFrame, Detections, MAX_OBJECT_POINTS, MAX_OBJECTS, ObjectMap, OccupancyGrid, RobotState,
-    Validate, is_background_class,
-};
+use shm_types::{DepthFrame, Detections, RobotState, Validate, is_background_class, mask_mode};
 use std::collections::HashMap;
 use wilcoxon::RankScratch;
 
-pub use config::{AssociationConfig, MapperConfig, SopmConfig};
+pub use config::{
+    AssociationConfig, ExistenceConfig, ExtensionsConfig, MapperConfig, SegmentationConfig,
+    SopmConfig,
+};
 
 /// Why a frame was refused.
 #[derive(Debug, Clone, PartialEq, thiserror::Error)]
@@ -109,6 +130,8 @@ pub struct FrameStats {
     pub tests_passed: u32,
     /// Duplicate objects merged into older ones after the frame.
     pub merged: u32,
+    /// Objects deleted because their existence fell below the threshold.
+    pub deleted: u32,
 }
 
 impl std::ops::AddAssign for FrameStats {
@@ -121,6 +144,7 @@ impl std::ops::AddAssign for FrameStats {
         self.tests += o.tests;
         self.tests_passed += o.tests_passed;
         self.merged += o.merged;
+        self.deleted += o.deleted;
     }
 }
 
@@ -165,7 +189,7 @@ impl Mapper {
         Ok(Self {
             cfg: cfg.clone(),
             camera: *camera,
-            groups: ClassGroups::default(),
+            groups: ClassGroups::new(&cfg.association.lookalike),
             objects: Vec::new(),
             next_id: 1,
             grid: ExplorationGrid::new(&cfg.grid),
@@ -262,12 +286,18 @@ impl Mapper {
         self.det_order.clear();
         self.det_order
             .extend((0..dets.len()).filter(|i| is_background_class(dets[*i].class_id)));
-        let n_bg = self.det_order.len();
         self.det_order
             .extend((0..dets.len()).filter(|i| !is_background_class(dets[*i].class_id)));
         if self.det_points.len() < dets.len() {
             self.det_points.resize_with(dets.len(), Vec::new);
         }
+        let min_score = self.cfg.min_score;
+        self.det_order.retain(|i| dets[*i].score >= min_score);
+        let n_bg = self
+            .det_order
+            .iter()
+            .filter(|i| is_background_class(dets[**i].class_id))
+            .count();
         let order = std::mem::take(&mut self.det_order);
         for (phase, range) in [(0, 0..n_bg), (1, n_bg..order.len())] {
             if phase == 1 {
@@ -285,98 +315,15 @@ impl Mapper {
             );
         }
         self.det_order = order;
-        stats.merged = self.merge_duplicates();
+        if self.cfg.extensions.existence {
+            stats.deleted = self.update_existence(frame, &camera, &pose, dets);
+        } else {
+            self.objects.iter_mut().for_each(|o| o.hit = false);
+        }
+        if self.cfg.extensions.duplicate_merge {
+            stats.merged = self.merge_duplicates();
+        }
         Ok(stats)
-    }
-
-    /// Whether objects `i` and `j` are one object seen twice: same kind (background or not),
-    /// compatible classes (background: equal), and strongly overlapping cuboids (background:
-    /// footprints, whatever their plane heights: a side view of a table yields a sliver whose
-    /// "plane" is any height of its front face): IoU ≥ `merge_iou`, or the smaller one's centre
-    /// inside the larger one with ≥ `merge_containment` of its volume (area) inside.
-    fn duplicates(&self, i: usize, j: usize) -> bool {
-        let (a, b) = (&self.objects[i], &self.objects[j]);
-        if a.background != b.background || a.observations == 0 || b.observations == 0 {
-            return false;
-        }
-        let (ca, cb) = (&a.cuboid, &b.cuboid);
-        // Cheap reject: bounding circles apart.
-        let (ra, rb) = (ca.size.truncate().length(), cb.size.truncate().length());
-        if ca.center.truncate().distance(cb.center.truncate()) > 0.5 * (ra + rb) {
-            return false;
-        }
-        let (inter, va, vb) = if a.background {
-            if a.class_id != b.class_id {
-                return false;
-            }
-            let area = |c: &cuboid::Box3| c.size.x.max(0.0) * c.size.y.max(0.0);
-            (ca.footprint_intersection(cb), area(ca), area(cb))
-        } else {
-            if !self.groups.compatible(a.class_id, b.class_id) {
-                return false;
-            }
-            (ca.intersection_volume(cb), ca.volume(), cb.volume())
-        };
-        if inter <= 0.0 {
-            return false;
-        }
-        let union = va + vb - inter;
-        if union > 0.0 && inter / union >= self.cfg.merge_iou {
-            return true;
-        }
-        let (small, large, v_small) = if va <= vb { (a, b, va) } else { (b, a, vb) };
-        let mut probe = small.cuboid.center;
-        if a.background {
-            probe.z = large.cuboid.center.z;
-        }
-        let m = self.cfg.merge_margin;
-        let grown = cuboid::Box3 {
-            size: large.cuboid.size + glam::Vec3::splat(2.0 * m),
-            ..large.cuboid
-        };
-        let inside = if a.background {
-            small.cuboid.footprint_intersection(&grown)
-        } else {
-            small.cuboid.intersection_volume(&grown)
-        };
-        v_small > 0.0 && inside / v_small >= self.cfg.merge_containment && large.contains(probe, m)
-    }
-
-    /// Merge duplicate objects into the older one (see [`MappedObject::absorb`]); the cuboid is
-    /// refitted from the merged cloud. Returns the number of objects merged away. Clusters follow
-    /// automatically: a foreground object's cluster is looked up among the surviving background
-    /// objects when the map is written.
-    fn merge_duplicates(&mut self) -> u32 {
-        let mut merged = 0;
-        let fit = self.fit_params();
-        'outer: loop {
-            for i in 0..self.objects.len() {
-                for j in i + 1..self.objects.len() {
-                    if !self.duplicates(i, j) {
-                        continue;
-                    }
-                    let (oi, oj) = (&self.objects[i], &self.objects[j]);
-                    let (keep, drop) = if (oi.first_seen_ns, oi.id) <= (oj.first_seen_ns, oj.id) {
-                        (i, j)
-                    } else {
-                        (j, i)
-                    };
-                    let gone = self.objects.remove(drop);
-                    let keep = if drop < keep { keep - 1 } else { keep };
-                    let o = &mut self.objects[keep];
-                    o.absorb(&gone);
-                    let dyaw = o.refit(&mut self.cuboid_scratch, &mut self.centroids, &fit);
-                    if !o.background {
-                        rest_on_support(&mut o.cuboid, &self.supports, self.cfg.support_margin);
-                    }
-                    o.follow_yaw(dyaw);
-                    merged += 1;
-                    continue 'outer;
-                }
-            }
-            break;
-        }
-        merged
     }
 
     fn refresh_supports(&mut self) {
@@ -413,6 +360,12 @@ impl Mapper {
             support_margin: self.cfg.support_margin,
             gap_min: self.cfg.gap_min,
             gap_factor: self.cfg.gap_factor,
+            boxes: detections.masks == mask_mode::BOXES,
+            segment: self
+                .cfg
+                .extensions
+                .box_segmentation
+                .then_some(self.cfg.segmentation),
         };
         let a = self.cfg.association.clone();
         let cam_from_world = pose.inverse();
@@ -514,6 +467,7 @@ impl Mapper {
                     let o = &mut self.objects[c.object];
                     o.c_asso = (1.0 - c.p).clamp(0.0, 1.0) as f32;
                     o.vote(det.class_id, det.score);
+                    o.hit = true;
                     stats.associated += 1;
                     Some(c.object)
                 }
@@ -523,7 +477,7 @@ impl Mapper {
                         .iter()
                         .filter(|c| c.detection == k && c.inside)
                         .min_by(|x, y| x.p.total_cmp(&y.p).reverse());
-                    if let Some(c) = blocker {
+                    if let Some(c) = blocker.filter(|_| self.cfg.extensions.inside_reject) {
                         self.objects[c.object].c_asso = (1.0 - c.p).clamp(0.0, 1.0) as f32;
                         stats.rejected += 1;
                         None
@@ -544,6 +498,9 @@ impl Mapper {
                             now_ns,
                         ));
                         self.next_id += 1;
+                        if let Some(o) = self.objects.last_mut() {
+                            o.hit = true;
+                        }
                         stats.created += 1;
                         Some(self.objects.len() - 1)
                     }
@@ -564,152 +521,6 @@ impl Mapper {
         self.cands = cands;
         self.assignment = assignment;
     }
-
-    /// Write the whole map in place into `out` (e.g. a loaned shared-memory sample). Sets
-    /// `header.sim_time_ns = now_ns`, `last_frame_seq`, `last_frame_stamp_ns`, `count`,
-    /// `eps_sopm` and the objects (ordered by id; at most [`MAX_OBJECTS`]); the host sets
-    /// `header.seq` and `header.stamp_ns`. Objects seen fewer than `min_observations` times are
-    /// left out. Unused object slots are not touched.
-    pub fn write_map(&mut self, out: &mut ObjectMap, now_ns: u64) {
-        out.header.sim_time_ns = now_ns;
-        out.last_frame_seq = self.last_frame_seq;
-        out.last_frame_stamp_ns = self.last_frame_stamp_ns;
-        out.eps_sopm = self.cfg.sopm.eps_sopm;
-        let mut count = 0usize;
-        let mut samples = std::mem::take(&mut self.samples);
-        for o in &self.objects {
-            if count == MAX_OBJECTS {
-                break;
-            }
-            if o.observations < self.cfg.min_observations || o.point_count == 0 {
-                continue;
-            }
-            let m = &mut out.objects[count];
-            m.first_seen_ns = o.first_seen_ns;
-            m.id = o.id;
-            m.class_id = o.class_id;
-            m.background = o.background as u8;
-            m.center = o.cuboid.center.to_array();
-            m.size = o.cuboid.size.to_array();
-            m.yaw = o.cuboid.yaw;
-            m.point_count = o.point_count;
-            m.cluster_id = if o.background {
-                o.id as i32
-            } else {
-                self.cluster_of(o)
-            };
-            m.observations = o.observations;
-            m.c_asso = o.c_asso.clamp(0.0, 1.0);
-            m.reserved = 0;
-            m.reserved_tail = 0;
-            match &o.sopm {
-                Some(s) => {
-                    let h = s.h_sopm();
-                    m.h_sopm = h;
-                    m.complete = (h < self.cfg.sopm.eps_sopm) as u8;
-                    m.l_best = s.l_best(&o.sopm_frame()).to_array();
-                    m.sopm_shape = s.params().shape.code();
-                    m.sopm_rows = s.params().rows as u16;
-                    m.sopm_cols = s.params().cols as u16;
-                    for g in 0..s.len() {
-                        m.sopm_prob[g] = s.prob(g).clamp(0.0, 1.0);
-                        m.sopm_obs[g] = s.obs(g).min(u16::MAX as u32) as u16;
-                    }
-                }
-                None => {
-                    m.h_sopm = 0.0;
-                    m.complete = 0;
-                    m.l_best = [0.0; 3];
-                    m.sopm_shape = self.cfg.sopm.shape.code();
-                    m.sopm_rows = 0;
-                    m.sopm_cols = 0;
-                }
-            }
-            o.samples(MAX_OBJECT_POINTS, &mut samples);
-            m.sample_count = samples.len() as u16;
-            for (k, (p, l)) in samples.iter().enumerate() {
-                m.points[k] = p.to_array();
-                m.point_los[k] = l.to_array();
-            }
-            count += 1;
-        }
-        self.samples = samples;
-        out.count = count as u32;
-    }
-
-    /// Background object supporting a foreground object: its footprint (grown by 5 cm) holds the
-    /// object's centre and its plane is within 10 cm of the object's bottom; the closest plane
-    /// wins. -1 if none.
-    fn cluster_of(&self, o: &MappedObject) -> i32 {
-        let bottom = o.cuboid.center.z - o.cuboid.size.z * 0.5;
-        let mut best: Option<(f32, u32)> = None;
-        for b in self
-            .objects
-            .iter()
-            .filter(|b| b.background && b.observations >= self.cfg.min_observations)
-        {
-            let Some(h) = b.support_height else { continue };
-            let probe = Vec3::new(o.cuboid.center.x, o.cuboid.center.y, b.cuboid.center.z);
-            let dz = (bottom - h).abs();
-            if dz <= 0.10 && b.contains(probe, 0.05) && best.is_none_or(|(d, _)| dz < d) {
-                best = Some((dz, b.id));
-            }
-        }
-        best.map_or(-1, |(_, id)| id as i32)
-    }
-
-    /// Write the exploration grid in place; sets `header.sim_time_ns` to the newest frame's time
-    /// (the host sets `seq` and `stamp_ns`).
-    pub fn write_grid(&self, out: &mut OccupancyGrid) {
-        out.header.sim_time_ns = self.last_sim_time_ns;
-        self.grid.write(out);
-    }
-}
-
-/// A foreground object whose bottom lies just above a supporting plane under it (within the band
-/// that bleed removal cut away) rests on that plane: extend its cuboid down to the plane.
-fn rest_on_support(b: &mut cuboid::Box3, supports: &[SupportPlane], margin: f32) {
-    let bottom = b.center.z - b.size.z * 0.5;
-    let top = bottom + b.size.z;
-    let plane = supports
-        .iter()
-        .filter(|s| s.under(b.center))
-        .map(|s| s.height)
-        .find(|h| bottom - h >= -margin && bottom - h <= 2.0 * margin);
-    if let Some(h) = plane {
-        b.size.z = top - h;
-        b.center.z = (top + h) * 0.5;
-    }
-}
-
-/// Centroids of the occupied voxels of `pts` (edge `voxel`), in first-seen order.
-fn voxel_centroids(
-    pts: &[Vec3],
-    voxel: f32,
-    map: &mut HashMap<[i32; 3], (Vec3, u32)>,
-    out: &mut Vec<[f32; 3]>,
-) {
-    map.clear();
-    out.clear();
-    let inv = 1.0 / voxel;
-    let mut order: Vec<[i32; 3]> = Vec::new();
-    for p in pts {
-        let k = [
-            (p.x * inv).floor() as i32,
-            (p.y * inv).floor() as i32,
-            (p.z * inv).floor() as i32,
-        ];
-        let e = map.entry(k).or_insert_with(|| {
-            order.push(k);
-            (Vec3::ZERO, 0)
-        });
-        e.0 += *p;
-        e.1 += 1;
-    }
-    for k in order {
-        let (s, n) = map[&k];
-        out.push((s / n as f32).to_array());
-    }
 }
 
 #[cfg(test)]
@@ -729,127 +540,6 @@ mod tests {
         assert_eq!(e.key(), "mapper.association.alpha");
         let e = crate::config::Config::parse(f, "[mapper.grid]\nwidth = 512\n").unwrap_err();
         assert_eq!(e.key(), "mapper.grid.height");
-    }
-
-    /// A table top: points on a plane at 0.72 m over `x0..x1 × y0..y1`.
-    fn table_points(x0: f32, x1: f32, y0: f32, y1: f32) -> Vec<Vec3> {
-        let mut v = Vec::new();
-        let n = 30;
-        for i in 0..=n {
-            for j in 0..=n {
-                let (fx, fy) = (i as f32 / n as f32, j as f32 / n as f32);
-                v.push(Vec3::new(x0 + fx * (x1 - x0), y0 + fy * (y1 - y0), 0.72));
-            }
-        }
-        v
-    }
-
-    fn cube_points(c: Vec3, half: f32) -> Vec<Vec3> {
-        let mut v = Vec::new();
-        for i in 0..8 {
-            for j in 0..8 {
-                for k in 0..8 {
-                    let f = |t: i32| (t as f32 / 7.0 * 2.0 - 1.0) * half;
-                    v.push(c + Vec3::new(f(i), f(j), f(k)));
-                }
-            }
-        }
-        v
-    }
-
-    #[test]
-    fn duplicates_merge_into_the_older_object() {
-        let cam = Camera::from_fov(64, 48, 60.0, 46.8, 0.5, 5.0);
-        let mut m = Mapper::new(&MapperConfig::default(), &cam).unwrap();
-        let id = |n| shm_types::class_id(n).unwrap();
-        let table = id("dining table");
-        let fit = m.fit_params();
-        let sopm = m.cfg.sopm.params();
-        let add = |m: &mut Mapper, class, bg: bool, t: u64, pts: &[Vec3], from: Vec3| {
-            let mut o = MappedObject::new(
-                m.next_id,
-                class,
-                0.9,
-                bg,
-                if bg { 0.03 } else { 0.01 },
-                20000,
-                (!bg).then_some(sopm),
-                t,
-            );
-            m.next_id += 1;
-            o.merge(pts, from);
-            o.refit(&mut m.cuboid_scratch, &mut m.centroids, &fit);
-            o.observations = 1;
-            o.update_sopm(pts, from, 0.0);
-            m.objects.push(o);
-        };
-        // The same table seen from two sides: two partial footprints overlapping by 70 %.
-        add(
-            &mut m,
-            table,
-            true,
-            5,
-            &table_points(0.0, 1.0, 0.0, 0.8),
-            Vec3::ZERO,
-        );
-        add(
-            &mut m,
-            table,
-            true,
-            3,
-            &table_points(0.3, 1.3, 0.0, 0.8),
-            Vec3::ZERO,
-        );
-        // Its front face seen edge-on (8 cm deep band of points from 0.3 to 0.6 m high).
-        let face: Vec<Vec3> = (0..400)
-            .map(|k| {
-                Vec3::new(
-                    0.4 + (k % 20) as f32 * 0.02,
-                    0.01 + (k % 5) as f32 * 0.02,
-                    0.3 + (k / 20) as f32 * 0.015,
-                )
-            })
-            .collect();
-        add(&mut m, table, true, 8, &face, Vec3::ZERO);
-        // A cup and a vase (confusable) at the same place, a bottle 30 cm away, a chair table.
-        let c = Vec3::new(0.5, 0.4, 0.8);
-        let left = Vec3::new(0.5, -1.0, 1.0);
-        let right = Vec3::new(0.5, 2.0, 1.0);
-        add(&mut m, id("cup"), false, 7, &cube_points(c, 0.04), left);
-        add(
-            &mut m,
-            id("vase"),
-            false,
-            9,
-            &cube_points(c + Vec3::X * 0.01, 0.04),
-            right,
-        );
-        add(
-            &mut m,
-            id("bottle"),
-            false,
-            9,
-            &cube_points(c + Vec3::X * 0.3, 0.04),
-            left,
-        );
-        let cup_h = m.objects[3].sopm.as_ref().unwrap().h_sopm();
-        assert!(m.objects[2].support_height.unwrap() < 0.65);
-        assert_eq!(m.merge_duplicates(), 3);
-        assert_eq!(m.objects.len(), 3);
-        let t = &m.objects[0];
-        // Id of the one seen first (id 2, t = 3), union of the footprints.
-        assert_eq!((t.id, t.first_seen_ns, t.observations), (2, 3, 3));
-        assert!((t.cuboid.size.x - 1.3).abs() < 0.05, "{:?}", t.cuboid);
-        assert!((t.support_height.unwrap() - 0.72).abs() < 0.02);
-        let cup = &m.objects[1];
-        assert_eq!((cup.id, cup.observations), (4, 2));
-        assert!([id("cup"), id("vase")].contains(&cup.class_id));
-        // Both sides' evidence: the merged map is more certain than either half.
-        assert!(cup.sopm.as_ref().unwrap().h_sopm() < cup_h - 0.1);
-        assert_eq!(m.objects[2].class_id, id("bottle"));
-        // The cup's cluster is the surviving table.
-        m.refresh_supports();
-        assert_eq!(m.cluster_of(&m.objects[1]), 2);
     }
 
     #[test]
@@ -884,7 +574,7 @@ mod tests {
         assert_eq!(m.integrate(&f, &d, &ok).unwrap(), FrameStats::default());
         let lost = RobotState::default();
         assert!(m.integrate(&f, &d, &lost).unwrap().skipped);
-        let mut map = shm_types::boxed_zeroed::<ObjectMap>();
+        let mut map = shm_types::boxed_zeroed::<shm_types::ObjectMap>();
         m.write_map(&mut map, 9);
         assert_eq!(
             (map.count, map.last_frame_seq, map.header.sim_time_ns),

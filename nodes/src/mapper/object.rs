@@ -72,6 +72,12 @@ pub struct MappedObject {
     pub c_asso: f32,
     /// Points merged.
     pub point_count: u32,
+    /// Existence log-odds ([`super::existence`]).
+    pub existence: f32,
+    /// Associated with a detection in the current frame.
+    pub hit: bool,
+    /// Camera position of the newest existence update.
+    pub last_view: Option<Vec3>,
 }
 
 impl MappedObject {
@@ -107,6 +113,9 @@ impl MappedObject {
             first_seen_ns: now_ns,
             c_asso: 1.0,
             point_count: 0,
+            existence: 0.0,
+            hit: false,
+            last_view: None,
         }
     }
 
@@ -194,6 +203,8 @@ impl MappedObject {
         self.observations = self.observations.saturating_add(other.observations);
         self.first_seen_ns = self.first_seen_ns.min(other.first_seen_ns);
         self.c_asso = self.c_asso.max(other.c_asso);
+        self.existence = self.existence.max(other.existence);
+        self.hit |= other.hit;
         if self.support_height.is_none() {
             self.support_height = other.support_height;
         }

@@ -1,5 +1,6 @@
-//! Points of one detection: masked valid depth pixels back-projected to the world with the
-//! frame's (estimated) camera pose, then cleaned of the mask's bleed onto the background.
+//! Points of one detection: masked valid depth pixels (box-only detections: every pixel of the
+//! box) back-projected to the world with the frame's (estimated) camera pose, then cleaned of
+//! the mask's bleed onto the background.
 //!
 //! Cleaning, in order:
 //! 1. depth outside the camera's valid range is rejected;
@@ -13,11 +14,20 @@
 //!    component is kept. Bleed onto a wall or an object behind lies across a depth jump, so it
 //!    forms its own component. Working in the image (not in 3D voxels) keeps far, grazing surfaces
 //!    such as a table top connected whatever the sampling stride.
+//!
+//! Box-only detections ([`shm_types::mask_mode::BOXES`]) take every pixel of the box; with
+//! `[mapper.extensions] box_segmentation` the object is then segmented out of the box
+//! ([`super::segment`]): supporting planes and what lies under them removed, the depth cluster
+//! that fits the box and the class size prior chosen, outliers rejected.
 
 use super::cuboid::Box3;
 use crate::geom::Camera;
 use glam::{Affine3A, Vec3};
 use shm_types::{DepthFrame, Detection};
+
+/// Box-only detections of foreground objects: points down to this far (m) under a known
+/// supporting plane, inside its footprint, are the support's own (apron, front face, legs).
+const UNDER_SUPPORT: f32 = 0.3;
 
 /// Parameters of the extraction.
 #[derive(Debug, Clone, Copy, PartialEq)]
@@ -34,6 +44,10 @@ pub struct ExtractParams {
     pub gap_min: f32,
     /// Depth-step allowance in units of the lateral sample spacing (`z · stride / f`).
     pub gap_factor: f32,
+    /// Box-only detections: every pixel of the box is a candidate (the label image is unused).
+    pub boxes: bool,
+    /// With `boxes`: segment the object out of the box (else the largest depth cluster).
+    pub segment: Option<super::config::SegmentationConfig>,
 }
 
 /// A background object's supporting plane (top surface).
@@ -50,6 +64,12 @@ impl SupportPlane {
         (p.z - self.height).abs() <= margin && self.under(p)
     }
 
+    /// `p` lies on the plane or in the band of `depth` metres under it (the table's apron, front
+    /// face and legs), inside the footprint.
+    fn holds_or_under(&self, p: Vec3, margin: f32, depth: f32) -> bool {
+        p.z - self.height <= margin && self.height - p.z <= depth && self.under(p)
+    }
+
     /// Whether the footprint (grown by 2 cm) lies under `p` (x, y only).
     pub fn under(&self, p: Vec3) -> bool {
         let (s, c) = self.footprint.yaw.sin_cos();
@@ -61,18 +81,36 @@ impl SupportPlane {
     }
 }
 
+/// A foreground object whose bottom lies just above a supporting plane under it (within the band
+/// that bleed removal cut away) rests on that plane: extend its cuboid down to the plane.
+pub fn rest_on_support(b: &mut Box3, supports: &[SupportPlane], margin: f32) {
+    let bottom = b.center.z - b.size.z * 0.5;
+    let top = bottom + b.size.z;
+    let plane = supports
+        .iter()
+        .filter(|s| s.under(b.center))
+        .map(|s| s.height)
+        .find(|h| bottom - h >= -margin && bottom - h <= 2.0 * margin);
+    if let Some(h) = plane {
+        b.size.z = top - h;
+        b.center.z = (top + h) * 0.5;
+    }
+}
+
 /// Reusable buffers of the extraction.
 #[derive(Debug, Clone, Default)]
 pub struct PointScratch {
     /// Per grid sample: index into `raw` or `u32::MAX`.
-    grid: Vec<u32>,
-    raw: Vec<Vec3>,
-    depth: Vec<f32>,
-    parent: Vec<u32>,
-    weight: Vec<u32>,
+    pub(super) grid: Vec<u32>,
+    pub(super) raw: Vec<Vec3>,
+    pub(super) depth: Vec<f32>,
+    /// Grid index of each raw point.
+    pub(super) cell: Vec<u32>,
+    pub(super) parent: Vec<u32>,
+    pub(super) weight: Vec<u32>,
 }
 
-fn find(parent: &mut [u32], mut i: u32) -> u32 {
+pub(super) fn find(parent: &mut [u32], mut i: u32) -> u32 {
     while parent[i as usize] != i {
         let p = parent[i as usize];
         parent[i as usize] = parent[p as usize];
@@ -100,15 +138,18 @@ impl PointScratch {
         out.clear();
         self.raw.clear();
         self.depth.clear();
+        self.cell.clear();
         let (w, h) = (frame.width as usize, frame.height as usize);
         let depth = frame.pixels();
-        if labels.len() < w * h || depth.len() < w * h || det.label == 0 || det.label > 255 {
+        if depth.len() < w * h
+            || (!params.boxes && (labels.len() < w * h || det.label == 0 || det.label > 255))
+        {
             return 0;
         }
         let label = det.label as u8;
         let [x0, y0, x1, y1] = det.bbox.map(|v| v as usize);
         let (x1, y1) = (x1.min(w), y1.min(h));
-        let area = if det.mask_pixels > 0 {
+        let area = if det.mask_pixels > 0 && !params.boxes {
             det.mask_pixels as usize
         } else {
             (x1.saturating_sub(x0)) * (y1.saturating_sub(y0))
@@ -125,7 +166,7 @@ impl PointScratch {
         for (gy, v) in (y0..y1).step_by(stride).enumerate() {
             let row = v * w;
             for (gx, u) in (x0..x1).step_by(stride).enumerate() {
-                if labels[row + u] != label {
+                if !params.boxes && labels[row + u] != label {
                     continue;
                 }
                 let d = depth[row + u];
@@ -144,32 +185,39 @@ impl PointScratch {
                 if p.z < params.floor_margin {
                     continue;
                 }
-                if foreground && supports.iter().any(|s| s.holds(p, params.support_margin)) {
+                if foreground
+                    && supports.iter().any(|s| {
+                        if params.boxes {
+                            s.holds_or_under(p, params.support_margin, UNDER_SUPPORT)
+                        } else {
+                            s.holds(p, params.support_margin)
+                        }
+                    })
+                {
                     continue;
                 }
                 self.grid[gy * gw + gx] = self.raw.len() as u32;
+                self.cell.push((gy * gw + gx) as u32);
                 self.raw.push(p);
                 self.depth.push(z);
             }
         }
         let spacing = stride as f32 / camera.k.fx.min(camera.k.fy);
-        self.largest_component(gw, gh, params.gap_min, params.gap_factor * spacing, out);
+        let gap_per_m = params.gap_factor * spacing;
+        match (&params.segment, params.boxes) {
+            (Some(seg), true) => {
+                let prior = super::priors::size_prior(det.class_id);
+                let geo = super::segment::Grid { gw, gh };
+                self.segment_box(geo, &prior, foreground, seg, params.gap_min, gap_per_m, out);
+            }
+            _ => self.largest_component(gw, gh, params.gap_min, gap_per_m, out),
+        }
         out.len()
     }
 
-    /// Keep the largest depth-continuous component of the sample grid (`gw × gh`) in `out`.
-    fn largest_component(
-        &mut self,
-        gw: usize,
-        gh: usize,
-        gap_min: f32,
-        gap_per_m: f32,
-        out: &mut Vec<Vec3>,
-    ) {
-        out.clear();
-        if self.raw.is_empty() {
-            return;
-        }
+    /// Union the depth-continuous 4-neighbours of the sample grid (`gw × gh`): afterwards
+    /// `find(parent, i)` is the component of raw point `i` (points not in the grid stay alone).
+    pub(super) fn connect(&mut self, gw: usize, gh: usize, gap_min: f32, gap_per_m: f32) {
         let n = self.raw.len();
         self.parent.clear();
         self.parent.extend(0..n as u32);
@@ -197,6 +245,23 @@ impl PointScratch {
                 }
             }
         }
+    }
+
+    /// Keep the largest depth-continuous component of the sample grid (`gw × gh`) in `out`.
+    fn largest_component(
+        &mut self,
+        gw: usize,
+        gh: usize,
+        gap_min: f32,
+        gap_per_m: f32,
+        out: &mut Vec<Vec3>,
+    ) {
+        out.clear();
+        if self.raw.is_empty() {
+            return;
+        }
+        let n = self.raw.len();
+        self.connect(gw, gh, gap_min, gap_per_m);
         self.weight.clear();
         self.weight.resize(n, 0);
         for i in 0..n as u32 {

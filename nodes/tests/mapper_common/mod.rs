@@ -102,6 +102,8 @@ pub struct RenderOpts {
     pub bleed_px: u32,
     /// Instances with fewer visible pixels are not detected.
     pub min_pixels: u32,
+    /// Box-only detections (a YOLO-class detector): no label image, `masks = BOXES`.
+    pub boxes: bool,
 }
 
 impl Default for RenderOpts {
@@ -110,6 +112,7 @@ impl Default for RenderOpts {
             noise: true,
             bleed_px: 2,
             min_pixels: 30,
+            boxes: false,
         }
     }
 }
@@ -235,6 +238,7 @@ pub fn render(
         }
     }
     dets.count = 0;
+    dets.masks = shm_types::mask_mode::MASKS;
     for k in 0..n {
         if count[k] >= opts.min_pixels && (dets.count as usize) < MAX_DETECTIONS {
             dets.items[dets.count as usize] = Detection {
@@ -253,6 +257,20 @@ pub fn render(
                 *l = 0;
             }
         }
+    }
+    if opts.boxes {
+        to_boxes(dets);
+    }
+}
+
+/// Turn mask detections into box-only ones (a YOLO-class detector's output).
+pub fn to_boxes(dets: &mut Detections) {
+    let n = (dets.width * dets.height) as usize;
+    dets.labels[..n].fill(0);
+    dets.masks = shm_types::mask_mode::BOXES;
+    let count = dets.count as usize;
+    for d in &mut dets.items[..count] {
+        d.mask_pixels = 0;
     }
 }
 

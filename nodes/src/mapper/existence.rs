@@ -1,0 +1,237 @@
+//! Existence of objects (an addition beyond the paper, `[mapper.extensions] existence`): a
+//! log-odds existence per object, as an occupancy cell's, so that false positives leave the map
+//! while real objects missed now and then survive (cf. EAO-SLAM's object pruning).
+//!
+//! Every frame, after association, each object is
+//! - **hit** when a detection was associated with it: `l += ln(p_detect / p_false)`;
+//! - **missed** when it should have been seen and was not: `l += ln((1 − p_detect) / (1 − p_false))`.
+//!   It should have been seen when its cuboid projects into the frame (at least `min_in_frame`
+//!   of its projected box inside the image, the box at least `min_box_px` pixels), its centre is
+//!   in front of the camera within `max_range`, and it is not occluded: on a grid of points on
+//!   the cuboid faces turned towards the camera, at least `min_visible` of those with valid depth
+//!   are not behind the frame's depth by more than `occlusion_tolerance` (a cuboid face lies at
+//!   or in front of the object's surface, so the frame seeing the object or what is behind it
+//!   counts as visible). It is not counted missed when a detection of a compatible class that
+//!   went elsewhere (or was refused) overlaps its projected box (IoU ≥ `overlap_iou`): nearby
+//!   objects merged into one box, a jittered box failing the test.
+//!
+//! A detector's misses are not independent between nearby views (10 Hz frames of one scene, a
+//! persistent per-direction failure), so evidence is taken once per viewpoint: an object's `l`
+//! changes only when the camera moved `min_view_change` or turned `min_view_angle_deg` around the
+//! object since its last change. `l` is clamped to `±max_log_odds`; an object below
+//! `delete_below` is deleted.
+
+use super::Mapper;
+use super::cuboid::Box3;
+use crate::geom::{Camera, Cuboid};
+use glam::{Affine3A, Mat3, Vec3};
+use shm_types::{DepthFrame, Detection};
+
+/// Intersection over union of two pixel boxes `[x0, y0, x1, y1]`.
+fn box_iou(a: [f32; 4], b: [f32; 4]) -> f32 {
+    let iw = (a[2].min(b[2]) - a[0].max(b[0])).max(0.0);
+    let ih = (a[3].min(b[3]) - a[1].max(b[1])).max(0.0);
+    let inter = iw * ih;
+    let area = |r: [f32; 4]| (r[2] - r[0]).max(0.0) * (r[3] - r[1]).max(0.0);
+    let union = area(a) + area(b) - inter;
+    if union > 0.0 { inter / union } else { 0.0 }
+}
+
+/// Sample grid per visible face.
+const FACE_SAMPLES: usize = 4;
+
+/// Whether the cuboid's camera-facing faces are mostly unoccluded in `frame`: returns `None`
+/// when too few samples have a valid depth.
+fn unoccluded_fraction(
+    b: &Box3,
+    frame: &DepthFrame,
+    camera: &Camera,
+    cam_from_world: &Affine3A,
+    cam_pos: Vec3,
+    tolerance: f32,
+) -> Option<f32> {
+    let (w, h) = (frame.width as usize, frame.height as usize);
+    let depth = frame.pixels();
+    let rot = Mat3::from_rotation_z(b.yaw);
+    let half = b.size * 0.5;
+    let (mut seen, mut total) = (0u32, 0u32);
+    for axis in 0..3 {
+        for sign in [-1.0f32, 1.0] {
+            let mut n = Vec3::ZERO;
+            n[axis] = sign;
+            let normal = rot * n;
+            let face_centre = b.center + rot * (n * half);
+            if normal.dot(cam_pos - face_centre) <= 0.0 {
+                continue;
+            }
+            let (u_ax, v_ax) = ((axis + 1) % 3, (axis + 2) % 3);
+            for i in 0..FACE_SAMPLES {
+                for j in 0..FACE_SAMPLES {
+                    let f = |k: usize| ((k as f32 + 0.5) / FACE_SAMPLES as f32 * 2.0 - 1.0) * 0.8;
+                    let mut l = n * half;
+                    l[u_ax] = f(i) * half[u_ax];
+                    l[v_ax] = f(j) * half[v_ax];
+                    let pc = cam_from_world.transform_point3(b.center + rot * l);
+                    let Some(px) = camera.project(pc) else {
+                        continue;
+                    };
+                    if px.x < 0.0 || px.y < 0.0 || px.x >= w as f32 || px.y >= h as f32 {
+                        continue;
+                    }
+                    let d = depth[px.y as usize * w + px.x as usize];
+                    if d == 0 {
+                        continue;
+                    }
+                    total += 1;
+                    seen += (d as f32 * 1e-3 >= pc.z - tolerance) as u32;
+                }
+            }
+        }
+    }
+    (total >= 4).then(|| seen as f32 / total as f32)
+}
+
+impl Mapper {
+    /// Update every object's existence after the frame's associations (objects' `hit` flags)
+    /// and delete those below `delete_below`. Returns the number deleted.
+    pub(super) fn update_existence(
+        &mut self,
+        frame: &DepthFrame,
+        camera: &Camera,
+        pose: &Affine3A,
+        dets: &[Detection],
+    ) -> u32 {
+        let e = self.cfg.existence.clone();
+        let hit = (e.p_detect / e.p_false).ln();
+        let miss = ((1.0 - e.p_detect) / (1.0 - e.p_false)).ln();
+        let cam_from_world = pose.inverse();
+        let scale = (camera.width * camera.height) as f32 / (640.0 * 480.0);
+        let min_px = e.min_box_px * scale;
+        let cam_pos: Vec3 = pose.translation.into();
+        let cos_min = e.min_view_angle_deg.to_radians().cos();
+        let mut deleted = 0;
+        let mut k = 0;
+        while k < self.objects.len() {
+            let o = &self.objects[k];
+            let delta = if o.hit {
+                hit
+            } else if self.should_see(
+                o.class_id,
+                &o.cuboid,
+                frame,
+                camera,
+                &cam_from_world,
+                dets,
+                min_px,
+            ) {
+                miss
+            } else {
+                0.0
+            };
+            let o = &mut self.objects[k];
+            o.hit = false;
+            let new_view = o.last_view.is_none_or(|p| {
+                let (a, b) = (p - o.cuboid.center, cam_pos - o.cuboid.center);
+                p.distance(cam_pos) >= e.min_view_change
+                    || a.normalize_or_zero().dot(b.normalize_or_zero()) <= cos_min
+            });
+            if delta != 0.0 && new_view {
+                o.last_view = Some(cam_pos);
+                o.existence = (o.existence + delta).clamp(-e.max_log_odds, e.max_log_odds);
+            }
+            if o.existence < e.delete_below {
+                self.objects.remove(k);
+                deleted += 1;
+            } else {
+                k += 1;
+            }
+        }
+        deleted
+    }
+
+    /// Whether an object with cuboid `b` should have been detected in this frame and no
+    /// overlapping compatible detection explains the miss.
+    #[allow(clippy::too_many_arguments)]
+    fn should_see(
+        &self,
+        class_id: shm_types::ClassId,
+        b: &Box3,
+        frame: &DepthFrame,
+        camera: &Camera,
+        cam_from_world: &Affine3A,
+        dets: &[Detection],
+        min_px: f32,
+    ) -> bool {
+        let e = &self.cfg.existence;
+        let centre = cam_from_world.transform_point3(b.center);
+        if centre.z < camera.k.min_range || centre.length() > e.max_range {
+            return false;
+        }
+        // Projected box: every corner must be in front of the camera.
+        let cub = Cuboid {
+            center: b.center,
+            size: b.size,
+            yaw: b.yaw,
+        };
+        let mut raw = [
+            f32::INFINITY,
+            f32::INFINITY,
+            f32::NEG_INFINITY,
+            f32::NEG_INFINITY,
+        ];
+        for c in cub.corners() {
+            let pc = cam_from_world.transform_point3(c);
+            if pc.z < camera.k.min_range * 0.5 {
+                return false;
+            }
+            let Some(px) = camera.project(pc) else {
+                return false;
+            };
+            raw = [
+                raw[0].min(px.x),
+                raw[1].min(px.y),
+                raw[2].max(px.x),
+                raw[3].max(px.y),
+            ];
+        }
+        let (w, h) = (camera.width as f32, camera.height as f32);
+        let clipped = [
+            raw[0].clamp(0.0, w),
+            raw[1].clamp(0.0, h),
+            raw[2].clamp(0.0, w),
+            raw[3].clamp(0.0, h),
+        ];
+        let area = |r: [f32; 4]| (r[2] - r[0]).max(0.0) * (r[3] - r[1]).max(0.0);
+        let (full, inside) = (area(raw), area(clipped));
+        if full <= 0.0 || inside < e.min_in_frame * full || inside < min_px {
+            return false;
+        }
+        if dets.iter().any(|d| {
+            self.groups.compatible(d.class_id, class_id)
+                && box_iou(d.bbox.map(f32::from), clipped) >= e.overlap_iou
+        }) {
+            return false;
+        }
+        let cam_pos: Vec3 = cam_from_world.inverse().translation.into();
+        unoccluded_fraction(
+            b,
+            frame,
+            camera,
+            cam_from_world,
+            cam_pos,
+            e.occlusion_tolerance,
+        )
+        .is_some_and(|f| f >= e.min_visible)
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn box_iou_of_overlapping_boxes() {
+        assert!((box_iou([0.0, 0.0, 2.0, 2.0], [1.0, 0.0, 3.0, 2.0]) - 1.0 / 3.0).abs() < 1e-6);
+        assert_eq!(box_iou([0.0, 0.0, 1.0, 1.0], [2.0, 2.0, 3.0, 3.0]), 0.0);
+    }
+}
