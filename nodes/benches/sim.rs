@@ -3,9 +3,18 @@
 //!
 //! `cargo bench -p nodes --bench sim`
 //!
-//! Recorded 2026-11 on the 2-vCPU dev VM (shared with other builds, load ≈ 1–2):
-//! depth_only 7.6 ms (132 frames/s), sim_render_full 12.8 ms (78 frames/s),
+//! Recorded 2026-11 on the 2-vCPU dev VM (shared with other builds, load ≈ 1–2), per-pixel ray
+//! casting: depth_only 7.6 ms (132 frames/s), sim_render_full 12.8 ms (78 frames/s),
 //! depth_only_1thread 15.6 ms (64 frames/s). Under heavy load (≈ 4) the figures roughly double.
+//!
+//! Row packets with vectorised kernels (`sim/rowcast.rs`), 2026-12-01, the old and the new
+//! binaries run alternately twice in one session at load ≈ 11–12 (absolute figures ≈ 4× the
+//! unloaded ones; the ratios are what carries over): depth_only 28.5 (45.6, a disturbed run) →
+//! 17.5 / 18.4 ms (× 0.62),
+//! sim_render_full 43.5 / 45.5 → 33.8 / 31.4 ms (× 0.73), depth_only_1thread 32.0 / 25.8 →
+//! 20.2 / 20.5 ms (× 0.71). Per-thread CPU time of one frame in the same conditions: depth
+//! 6.5 ms, detector 4.7–5.4 ms, localization's `count_visible` 0.15 ms; the detector is now
+//! ≈ 40 % of `sim_render_full`.
 
 use criterion::{Criterion, Throughput, criterion_group, criterion_main};
 use nodes::config::Config;
