@@ -380,6 +380,20 @@ impl Config {
         }
     }
 
+    /// The built-in configuration with `config/sensing-ideal.toml` merged over it: near-perfect
+    /// sensing (instance masks, no false positives or confusion, no depth artefacts, no SLAM
+    /// residuals), for tests of mapper and planner logic and for comparisons with the default.
+    ///
+    /// # Panics
+    /// Never in a build whose embedded `config/sensing-ideal.toml` is valid (a test checks it).
+    pub fn ideal_sensing() -> Self {
+        Self::parse(
+            Path::new("config/sensing-ideal.toml"),
+            include_str!("../../config/sensing-ideal.toml"),
+        )
+        .expect("config/sensing-ideal.toml is valid")
+    }
+
     /// The built-in defaults (`config/default.toml` as compiled in).
     pub fn builtin() -> Self {
         Self::parse(Path::new(DEFAULT_PATH), DEFAULT_TOML)

@@ -198,7 +198,7 @@ fn false_backpack(dets: &Detections) -> Detection {
     Detection {
         class_id: class_id("backpack").unwrap(),
         label: 0,
-        score: 0.45,
+        score: 0.55, // above [mapper] min_score: this tests existence, not the score gate
         bbox: dets.items[i].bbox,
         mask_pixels: 0,
     }

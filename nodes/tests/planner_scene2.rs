@@ -48,7 +48,7 @@ fn desk_2_map() -> Box<ObjectMap> {
 
 #[test]
 fn gbv_reaches_around_the_desk_by_the_wall_on_the_simulators_map() {
-    let cfg = Config::builtin();
+    let cfg = Config::ideal_sensing();
     let scene = Scene::builtin("paper-scene-2").unwrap();
     let sim = Sim::new(scene, &cfg, 1).unwrap();
     let mut nav = boxed_zeroed::<OccupancyGrid>();
@@ -113,7 +113,7 @@ fn gbv_reaches_around_the_desk_by_the_wall_on_the_simulators_map() {
 
 #[test]
 fn vpsom_terminates_on_paper_scene_2() {
-    let base = Config::builtin();
+    let base = Config::ideal_sensing();
     let b = base.bench;
     let cfg = base.with_camera(b.camera_width, b.camera_height, b.camera_hz);
     let spec = SessionSpec {

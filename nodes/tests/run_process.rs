@@ -31,8 +31,12 @@ fn multi_process_run_terminates_and_matches_lockstep_quality() {
     let ns = format!("test{}", std::process::id());
     // Under GBV load (the pool kept busy with extra evaluations), planning rounds must still
     // get through and end the session.
+    // Ideal sensing: this compares the hosts, not the sensing (see config/sensing-ideal.toml).
+    let ideal = concat!(env!("CARGO_MANIFEST_DIR"), "/../config/sensing-ideal.toml");
     let run = vpsom(&[
         "run",
+        "--config",
+        ideal,
         "--ns",
         &ns,
         "--out",
@@ -74,7 +78,14 @@ fn multi_process_run_terminates_and_matches_lockstep_quality() {
         "services left behind"
     );
 
-    vpsom(&["run", "--lockstep", "--out", lock.to_str().unwrap()]);
+    vpsom(&[
+        "run",
+        "--config",
+        ideal,
+        "--lockstep",
+        "--out",
+        lock.to_str().unwrap(),
+    ]);
     let l = metrics(&lock);
     assert_eq!(m["recall"], l["recall"], "live {m}\nlockstep {l}");
     let cde = |v: &serde_json::Value| v["cde_m"].as_f64().unwrap();

@@ -10,7 +10,7 @@ use runtime::recorder::{inspect, schemas::topic};
 use std::path::PathBuf;
 
 fn spec(label: &str, record: Option<PathBuf>) -> SessionSpec {
-    let base = Config::builtin();
+    let base = Config::ideal_sensing();
     let b = base.bench;
     let cfg = base.with_camera(b.camera_width, b.camera_height, b.camera_hz);
     SessionSpec {

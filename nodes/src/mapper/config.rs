@@ -115,6 +115,9 @@ pub struct ExtensionsConfig {
     /// Box-only detections: remove supporting planes, pick the depth cluster fitting the box and
     /// the class size prior, reject outliers (off: the largest depth cluster of the box).
     pub box_segmentation: bool,
+    /// Publish a foreground object only while it rests on a mapped supporting plane (it has a
+    /// cluster): detections on walls, on table fronts and seen through glass float in the air.
+    pub require_support: bool,
 }
 
 impl Default for ExtensionsConfig {

@@ -35,6 +35,14 @@ impl Mapper {
             if o.observations < self.min_observations() || o.point_count == 0 {
                 continue;
             }
+            let cluster_id = if o.background {
+                o.id as i32
+            } else {
+                self.cluster_of(o)
+            };
+            if cluster_id < 0 && self.cfg.extensions.require_support {
+                continue;
+            }
             let m = &mut out.objects[count];
             m.first_seen_ns = o.first_seen_ns;
             m.id = o.id;
@@ -44,11 +52,7 @@ impl Mapper {
             m.size = o.cuboid.size.to_array();
             m.yaw = o.cuboid.yaw;
             m.point_count = o.point_count;
-            m.cluster_id = if o.background {
-                o.id as i32
-            } else {
-                self.cluster_of(o)
-            };
+            m.cluster_id = cluster_id;
             m.observations = o.observations;
             m.c_asso = o.c_asso.clamp(0.0, 1.0);
             m.reserved = 0;
