@@ -3,8 +3,8 @@
 use nodes::eval::metrics::{Layer, REQUIRED_KEYS};
 use nodes::eval::*;
 use shm_types::{
-    Candidate, DeadlineEvent, ObjectMap, PlannerDecision, RobotState, boxed_zeroed, class_id,
-    decision_kind,
+    Candidate, DeadlineEvent, FrameVisibility, ObjectMap, ObjectVisibility, PlannerDecision,
+    RobotState, boxed_zeroed, class_id, decision_kind,
 };
 use std::path::PathBuf;
 
@@ -200,6 +200,23 @@ fn sample_session() -> (SessionLog, Vec<GtObject>, Vec<EstObject>) {
     log.observe_decision(&decision(decision_kind::GBV, 0.8, 3));
     log.observe_decision(&decision(decision_kind::LBV, 0.4, 1));
     log.observe_decision(&decision(decision_kind::LBV, 0.9, 0)); // sees nothing: not averaged
+    // Ground-truth visibility of three rendered frames: (60/100, 100/100), (20/80), nothing.
+    let mut vis = boxed_zeroed::<FrameVisibility>();
+    let seen = |object, visible_px, silhouette_px| ObjectVisibility {
+        object,
+        visible_px,
+        silhouette_px,
+        ..Default::default()
+    };
+    vis.count = 2;
+    vis.items[0] = seen(0, 60, 100);
+    vis.items[1] = seen(1, 100, 100);
+    log.observe_visibility(&vis);
+    vis.count = 1;
+    vis.items[0] = seen(0, 20, 80);
+    log.observe_visibility(&vis);
+    vis.count = 0;
+    log.observe_visibility(&vis);
     let mut no_choice = decision(decision_kind::LBV, 0.0, 0);
     no_choice.candidates[1].chosen = 0;
     log.observe_decision(&no_choice);
@@ -233,10 +250,13 @@ fn session_log_accumulates_path_views_failures_and_misses() {
     assert!(close(m.time_s, 12.5));
     assert!(m.terminated);
     assert_eq!(m.termination_reason, "all clusters complete");
-    // Pooled over (view, object): (0.8·3 + 0.4·1) / 4.
-    assert!(close(m.non_occlusion.unwrap(), 0.7));
-    assert!(close(m.non_occlusion_gbv.unwrap(), 0.8));
-    assert!(close(m.non_occlusion_lbv.unwrap(), 0.4));
+    // Ground truth, pooled over (frame, object): (0.6 + 1.0 + 0.25) / 3.
+    assert!(close(m.non_occlusion.unwrap(), 1.85 / 3.0));
+    assert_eq!((m.non_occlusion_samples, m.non_occlusion_frames), (3, 2));
+    // The planner's own H_IoU, pooled over (view, object): (0.8·3 + 0.4·1) / 4.
+    assert!(close(m.planner_h_iou.unwrap(), 0.7));
+    assert!(close(m.planner_h_iou_gbv.unwrap(), 0.8));
+    assert!(close(m.planner_h_iou_lbv.unwrap(), 0.4));
     assert_eq!((m.gbv_count, m.lbv_count), (1, 2));
     assert_eq!(m.localization_failures, 2);
     assert_eq!(m.deadline_misses, 5);
@@ -264,8 +284,11 @@ fn metrics_json_has_the_design_keys() {
         "termination_reason",
         "matched",
         "assigned",
-        "non_occlusion_gbv",
-        "non_occlusion_lbv",
+        "non_occlusion_samples",
+        "non_occlusion_frames",
+        "planner_h_iou",
+        "planner_h_iou_gbv",
+        "planner_h_iou_lbv",
         "gbv_count",
         "lbv_count",
         "match_params",

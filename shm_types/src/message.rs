@@ -3,8 +3,8 @@
 //! [`AnyBitPattern`] payloads, taken as it is ([`init_reused`]).
 
 use crate::{
-    AnyBitPattern, DeadlineEvent, DepthFrame, Detections, Header, NavGoal, NeckGoal, ObjectMap,
-    OccupancyGrid, PlannerDecision, RobotState, ZeroValid, zero_in_place,
+    AnyBitPattern, DeadlineEvent, DepthFrame, Detections, FrameVisibility, Header, NavGoal,
+    NeckGoal, ObjectMap, OccupancyGrid, PlannerDecision, RobotState, ZeroValid, zero_in_place,
 };
 use iceoryx2::prelude::{ZeroCopySend, ipc};
 use iceoryx2::sample_mut::SampleMut;
@@ -42,7 +42,8 @@ message!(
     NavGoal,
     NeckGoal,
     DeadlineEvent,
-    PlannerDecision
+    PlannerDecision,
+    FrameVisibility
 );
 
 /// Zero-fill a loaned, uninitialised iceoryx2 sample in place (in shared memory, no stack

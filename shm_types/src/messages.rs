@@ -883,6 +883,59 @@ impl Validate for PlannerDecision {
     }
 }
 
+/// How much of one ground-truth object a rendered frame shows (one entry of
+/// [`FrameVisibility`]). Ground truth: for evaluation only.
+#[derive(Debug, Clone, Copy, Default, PartialEq, Eq, ZeroCopySend)]
+#[repr(C)]
+#[type_name("vpsom::ObjectVisibility")]
+pub struct ObjectVisibility {
+    /// Index of the object in the scene.
+    pub object: u32,
+    /// Pixels of the frame's instance image that show the object.
+    pub visible_px: u32,
+    /// Pixels its unoccluded silhouette covers, clipped to the image.
+    pub silhouette_px: u32,
+    /// 1 if the unoccluded silhouette is cut by the image border.
+    pub truncated: u8,
+    /// Padding, always 0.
+    pub reserved: [u8; 3],
+}
+
+/// Per rendered frame, the visibility of every ground-truth foreground object in the camera's
+/// view (`sim/visibility`, evaluation only; which objects count is the simulator's
+/// `Sim::visibility`, the metric is `nodes::eval::occlusion`).
+#[derive(Debug, Clone, Copy, ZeroCopySend)]
+#[repr(C)]
+#[type_name("vpsom::FrameVisibility")]
+pub struct FrameVisibility {
+    /// Header.
+    pub header: Header,
+    /// `header.seq` of the depth frame rendered with it.
+    pub frame_seq: u64,
+    /// Valid entries of `items`.
+    pub count: u32,
+    /// Padding, always 0.
+    pub reserved: u32,
+    /// The objects in view.
+    pub items: [ObjectVisibility; MAX_OBJECTS],
+}
+
+impl FrameVisibility {
+    /// The valid entries.
+    pub fn items(&self) -> &[ObjectVisibility] {
+        &self.items[..(self.count as usize).min(MAX_OBJECTS)]
+    }
+}
+
+impl Validate for FrameVisibility {
+    fn validate(&self) -> Result<(), ValidationError> {
+        let c = Checker {
+            message: "FrameVisibility",
+        };
+        c.count("count", self.count as usize, MAX_OBJECTS)
+    }
+}
+
 // SAFETY (all impls below): each type is `#[repr(C)]` and made only of integers, floats and
 // arrays/structs thereof, for which the all-zero bit pattern is valid.
 macro_rules! zero_valid {
@@ -906,7 +959,9 @@ zero_valid!(
     NeckGoal,
     DeadlineEvent,
     Candidate,
-    PlannerDecision
+    PlannerDecision,
+    ObjectVisibility,
+    FrameVisibility
 );
 
 // SAFETY: `DepthFrame` is `#[repr(C)]` of a `Header` (three `u64`), `u32`s, `Intrinsics` (six
@@ -955,6 +1010,8 @@ mod tests {
         assert_eq!(size_of::<DeadlineEvent>(), 24 + 56 + 8 + THREAD_NAME_LEN);
         assert_eq!(size_of::<Candidate>(), 60);
         assert_eq!(size_of::<PlannerDecision>(), 56 + 60 * MAX_CANDIDATES);
+        assert_eq!(size_of::<ObjectVisibility>(), 16);
+        assert_eq!(size_of::<FrameVisibility>(), 24 + 16 + 16 * MAX_OBJECTS);
         assert_eq!(align_of::<ObjectMap>(), 8);
     }
 

@@ -188,6 +188,7 @@ pub fn run_session(
         sim.robot_state(&mut state);
         if t >= next_cam {
             sim.render(&mut frame, &mut dets, t);
+            log.observe_visibility(sim.visibility());
             frames += 1;
             sim.robot_state(&mut state);
             mapper.integrate(&frame, &dets, &state)?;

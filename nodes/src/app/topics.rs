@@ -9,6 +9,8 @@ pub const DETECTIONS: &str = "detections";
 pub const STATE: &str = "robot/state";
 /// True `RobotState` from the sim (evaluation and recording only).
 pub const TRUTH: &str = "sim/truth";
+/// `FrameVisibility` per rendered frame from the sim (ground truth: the non-occlusion metric).
+pub const VISIBILITY: &str = "sim/visibility";
 /// Navigation `OccupancyGrid` (obstacles only) from the sim.
 pub const NAV_GRID: &str = "nav/grid";
 /// `ObjectMap` from the mapper.

@@ -2,9 +2,13 @@
 
 use super::iou::aligned_iou;
 use super::matching::{MatchParams, ObjectMatch, assign};
+use super::occlusion::NonOcclusion;
 use super::plot::{PlotInput, Room, ViewPose};
 use serde::{Deserialize, Serialize};
-use shm_types::{DeadlineEvent, ObjectMap, PlannerDecision, RobotState, class_name, decision_kind};
+use shm_types::{
+    DeadlineEvent, FrameVisibility, ObjectMap, PlannerDecision, RobotState, class_name,
+    decision_kind,
+};
 
 /// A ground-truth object (world frame, metres, radians), independent of the simulator's types.
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
@@ -210,8 +214,9 @@ pub struct Metrics {
     pub path_length_m: f64,
     /// Simulated seconds from start to termination.
     pub time_s: f64,
-    /// Mean H_IoU over the foreground objects in view of every chosen view (GBV and LBV),
-    /// pooled over (view, object); null if no chosen view saw an object.
+    /// Non-occlusion measured on ground truth (`eval::occlusion`): mean visible fraction of
+    /// the foreground objects in view, over every (rendered frame, object) pair; null if no
+    /// frame had an object in view.
     pub non_occlusion: Option<f64>,
     /// Localization-failure episodes.
     pub localization_failures: u32,
@@ -227,12 +232,23 @@ pub struct Metrics {
     /// Assigned foreground pairs (IoU and CDE average over these).
     #[serde(default)]
     pub assigned: usize,
-    /// Non-occlusion over GBV decisions only.
+    /// (Frame, object) pairs `non_occlusion` averages over.
     #[serde(default)]
-    pub non_occlusion_gbv: Option<f64>,
-    /// Non-occlusion over LBV decisions only.
+    pub non_occlusion_samples: u64,
+    /// Rendered frames with at least one foreground object in view.
     #[serde(default)]
-    pub non_occlusion_lbv: Option<f64>,
+    pub non_occlusion_frames: u64,
+    /// The planner's own H_IoU (eq. 21, on its estimated cuboids) of its chosen views (GBV and
+    /// LBV), pooled over (view, object); null if no chosen view saw an object. Secondary: it is
+    /// 0 when the H_IoU term is ablated.
+    #[serde(default)]
+    pub planner_h_iou: Option<f64>,
+    /// The planner's own H_IoU over GBV decisions only.
+    #[serde(default)]
+    pub planner_h_iou_gbv: Option<f64>,
+    /// The planner's own H_IoU over LBV decisions only.
+    #[serde(default)]
+    pub planner_h_iou_lbv: Option<f64>,
     /// Chosen GBVs (planner decisions of kind GBV).
     #[serde(default)]
     pub gbv_count: u64,
@@ -311,9 +327,10 @@ pub struct SessionLog {
     trajectory: Vec<[f32; 2]>,
     localization_failures: u32,
     deadline_misses: u64,
-    non_occ_all: Pooled,
-    non_occ_gbv: Pooled,
-    non_occ_lbv: Pooled,
+    non_occlusion: NonOcclusion,
+    h_iou_all: Pooled,
+    h_iou_gbv: Pooled,
+    h_iou_lbv: Pooled,
     gbv: Vec<ViewPose>,
     lbv: Vec<ViewPose>,
 }
@@ -376,22 +393,34 @@ impl SessionLog {
         self.observe_nbv(kind, pose, c.h_iou, c.objects_in_view);
     }
 
-    /// Record one chosen view: its pose, the mean H_IoU over the foreground objects it sees and
-    /// their number (views seeing no object do not enter the non-occlusion mean).
+    /// Record one chosen view: its pose, the planner's mean H_IoU over the foreground objects
+    /// it sees and their number (views seeing no object do not enter the `planner_h_iou` mean).
     pub fn observe_nbv(&mut self, kind: NbvKind, pose: ViewPose, h_iou: f32, objects_in_view: u16) {
         let n = f64::from(objects_in_view);
         let h = f64::from(h_iou);
         if n > 0.0 && h.is_finite() {
-            self.non_occ_all.add(h, n);
+            self.h_iou_all.add(h, n);
             match kind {
-                NbvKind::Gbv => self.non_occ_gbv.add(h, n),
-                NbvKind::Lbv => self.non_occ_lbv.add(h, n),
+                NbvKind::Gbv => self.h_iou_gbv.add(h, n),
+                NbvKind::Lbv => self.h_iou_lbv.add(h, n),
             }
         }
         match kind {
             NbvKind::Gbv => self.gbv.push(pose),
             NbvKind::Lbv => self.lbv.push(pose),
         }
+    }
+
+    /// Feed the ground-truth visibility record of one rendered frame (`Sim::visibility`, or
+    /// `sim/visibility` in the deployment host): the non-occlusion metric
+    /// ([`occlusion`](super::occlusion)).
+    pub fn observe_visibility(&mut self, frame: &FrameVisibility) {
+        self.non_occlusion.observe(frame);
+    }
+
+    /// The non-occlusion accumulated so far.
+    pub fn non_occlusion(&self) -> &NonOcclusion {
+        &self.non_occlusion
     }
 
     /// Feed a deadline-monitor event; missed cycles are counted.
@@ -456,14 +485,17 @@ impl SessionLog {
             cde_m: fg.cde_m,
             path_length_m: self.path_length_m,
             time_s,
-            non_occlusion: self.non_occ_all.mean(),
+            non_occlusion: self.non_occlusion.mean(),
             localization_failures: self.localization_failures,
             deadline_misses: self.deadline_misses,
             termination_reason: self.reason.clone(),
             matched: fg.matched,
             assigned: fg.assigned,
-            non_occlusion_gbv: self.non_occ_gbv.mean(),
-            non_occlusion_lbv: self.non_occ_lbv.mean(),
+            non_occlusion_samples: self.non_occlusion.samples,
+            non_occlusion_frames: self.non_occlusion.frames_with_objects,
+            planner_h_iou: self.h_iou_all.mean(),
+            planner_h_iou_gbv: self.h_iou_gbv.mean(),
+            planner_h_iou_lbv: self.h_iou_lbv.mean(),
             gbv_count: self.gbv.len() as u64,
             lbv_count: self.lbv.len() as u64,
             match_params: *params,

@@ -9,6 +9,8 @@
 //!   (Hungarian algorithm, see [`matching::assign`] for the exact objective);
 //! - [`metrics`]: precision, recall, IoU, CDE of a map ([`score_map`]), the run's
 //!   [`Metrics`] (`metrics.json`) and the [`SessionLog`] accumulator;
+//! - [`occlusion`]: non-occlusion measured on ground truth (visible fraction of every
+//!   foreground object in view, over every rendered frame), [`NonOcclusion`];
 //! - [`mapfile`]: `map.json` (write, read, re-score);
 //! - [`report`]: Tables 1 and 2 of the paper from many `metrics.json` (`report.md`, CSVs);
 //! - [`plot`]: Figure-10-style top-down PNGs;
@@ -24,6 +26,7 @@
 //! let mut log = SessionLog::new();
 //! // ... for every true robot state: log.observe_truth(&state);
 //! // ... for every planner decision: log.observe_decision(&decision);
+//! // ... for every rendered frame:     log.observe_visibility(sim.visibility());
 //! // ... for every deadline event:   log.observe_deadline(&event);
 //! log.finish(123_000_000_000, true, "all clusters complete");
 //! let estimates = estimates_from_map(map);
@@ -38,6 +41,7 @@ pub mod iou;
 pub mod mapfile;
 pub mod matching;
 pub mod metrics;
+pub mod occlusion;
 pub mod plot;
 pub mod report;
 pub mod sensing;
@@ -48,6 +52,7 @@ pub use metrics::{
     EstObject, GtObject, MapScore, Metrics, NbvKind, RunInfo, SessionLog, estimates_from_map,
     score_map,
 };
+pub use occlusion::NonOcclusion;
 pub use plot::{PlotInput, Room, ViewPose, render_bench_figures, render_png};
 pub use report::{Report, find_metrics_files, load_metrics, write_report};
 

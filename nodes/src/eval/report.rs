@@ -478,8 +478,14 @@ most one ground-truth object of the same class (Hungarian algorithm: most pairs 
 0.1 m / estimates (0 with no estimate); Recall = the same / ground-truth objects; IoU = 3D IoU
 after aligning centres and yaw (only sizes matter) and CDE = centre distance (m), both averaged
 over all assigned pairs. Length of path = true base path (m); Cost time = simulated seconds to
-termination; Non-occlusion = mean H_IoU (eq. 21) over the foreground objects in view of every
-chosen GBV and LBV; Localization failure = episodes of the failure model.
+termination; Non-occlusion = physically visible fraction of each ground-truth foreground object
+in view (visible pixels of the true render / pixels of its unoccluded silhouette, both clipped to
+the image, so truncation is not occlusion; every object, background object and wall occludes),
+averaged over every (rendered frame, object) pair of the session, GBV and LBV views alike and the
+same for every planner; an object is in view when its centre is within the depth range in front
+of the camera and its unoccluded silhouette covers at least the detector's minimum pixels (the
+paper's eq. 21 estimates the same on projected boxes; the planner's own H_IoU is
+`planner_h_iou` in metrics.json); Localization failure = episodes of the failure model.
 ";
 
 /// Every `metrics.json` under the given paths: a path that is a file is taken as is, a

@@ -39,6 +39,7 @@ mod robot;
 mod rowcast;
 mod scene;
 mod slam;
+mod visibility;
 mod world;
 
 pub use artefacts::DepthArtefacts;
@@ -57,7 +58,10 @@ pub use world::{Hit, STRUCTURE, World};
 
 use crate::geom::{CameraMount, affine_to_pose};
 use glam::Affine3A;
-use shm_types::{DepthFrame, Detections, NavGoal, NeckGoal, OccupancyGrid, RobotState};
+use shm_types::{
+    DepthFrame, Detections, FrameVisibility, NavGoal, NeckGoal, OccupancyGrid, RobotState,
+    boxed_zeroed,
+};
 use std::sync::{Arc, OnceLock};
 
 /// Fraction of the robot radius by which obstacles are inflated for the TRUE base's collision
@@ -138,6 +142,8 @@ pub struct Sim {
     collision: NavGrid,
     loc: Localization,
     buf: RenderBuffers,
+    visibility_model: visibility::VisibilityModel,
+    visibility: Box<FrameVisibility>,
     time_ns: u64,
     frames: u64,
 }
@@ -172,6 +178,8 @@ impl Sim {
             grid,
             collision,
             buf: RenderBuffers::new(),
+            visibility_model: visibility::VisibilityModel::new(&scene, cfg.detector.min_pixels),
+            visibility: boxed_zeroed(),
             time_ns: 0,
             frames: 0,
             scene,
@@ -258,6 +266,18 @@ impl Sim {
         pool.install(|| detector.detect(instance, &cam, &true_pose, frames, dets));
         dets.header = frame.header;
         dets.frame_seq = frame.header.seq;
+        let vis = &mut *self.visibility;
+        let visible = self.detector.visible_pixels();
+        self.visibility_model.fill(&cam, &true_pose, visible, vis);
+        vis.header = frame.header;
+        vis.frame_seq = frame.header.seq;
+    }
+
+    /// Ground truth of the latest [`render`](Self::render): the visibility of every foreground
+    /// object in the camera's view (which objects count: `sim/visibility.rs`), the input of the
+    /// non-occlusion metric (`eval::occlusion`). Headers as the frame's; evaluation only.
+    pub fn visibility(&self) -> &FrameVisibility {
+        &self.visibility
     }
 
     /// `world_from_camera` for a base pose with the current neck.

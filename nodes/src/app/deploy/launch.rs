@@ -10,8 +10,8 @@ use anyhow::Context;
 use runtime::launcher::{ChildEvent, ChildSpec, Launcher};
 use runtime::ports::PortContext;
 use shm_types::{
-    DeadlineEvent, NavGoal, ObjectMap, PlannerDecision, RobotState, boxed_zeroed, decision_kind,
-    planner_state,
+    DeadlineEvent, FrameVisibility, NavGoal, ObjectMap, PlannerDecision, RobotState, boxed_zeroed,
+    decision_kind, planner_state,
 };
 use std::io::Write;
 use std::path::{Path, PathBuf};
@@ -104,6 +104,7 @@ pub fn run(args: &RunArgs, cfg: &Config, exe: &Path) -> anyhow::Result<RunOutcom
     // Subscribe before the nodes start so no decision or truth sample is missed.
     let ctx = PortContext::with_namespace(&cfg.ports, "run", &args.namespace)?;
     let truth = ctx.subscriber::<RobotState>(topics::TRUTH)?;
+    let visibility = ctx.subscriber::<FrameVisibility>(topics::VISIBILITY)?;
     let map_sub = ctx.subscriber::<ObjectMap>(topics::MAP)?;
     let decisions = ctx.subscriber::<PlannerDecision>(topics::DECISION)?;
     let deadline = ctx.subscriber::<DeadlineEvent>(topics::DEADLINE)?;
@@ -129,6 +130,9 @@ pub fn run(args: &RunArgs, cfg: &Config, exe: &Path) -> anyhow::Result<RunOutcom
         while let Some(s) = truth.receive()? {
             sim_ns = s.header.sim_time_ns;
             log.observe_truth(&s);
+        }
+        while let Some(v) = visibility.receive()? {
+            log.observe_visibility(&v);
         }
         if let Some(m) = map_sub.latest()? {
             map.copy_from(&m);
@@ -209,6 +213,9 @@ pub fn run(args: &RunArgs, cfg: &Config, exe: &Path) -> anyhow::Result<RunOutcom
     }
     while let Some(s) = truth.receive()? {
         log.observe_truth(&s);
+    }
+    while let Some(v) = visibility.receive()? {
+        log.observe_visibility(&v);
     }
     log.add_deadline_misses(misses);
     let terminated = final_state == Some(planner_state::TERMINATED);

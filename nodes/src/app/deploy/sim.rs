@@ -8,12 +8,15 @@ use crate::sim::{Scene, Sim};
 use runtime::clock::MonotonicClock;
 use runtime::executor::{ExecutorConfig, SchedPolicy};
 use runtime::ports::{PortContext, Publisher, Subscriber};
-use shm_types::{DepthFrame, Detections, NavGoal, NeckGoal, OccupancyGrid, RobotState};
+use shm_types::{
+    DepthFrame, Detections, FrameVisibility, NavGoal, NeckGoal, OccupancyGrid, RobotState,
+};
 use std::sync::atomic::AtomicBool;
 
 /// `vpsom node sim`: steps the simulator at `rates.state_hz` (simulated), renders frames at
 /// `rates.camera_hz` straight into loaned depth/detection samples, publishes robot state,
-/// ground truth and the navigation grid, and follows nav/neck goals.
+/// ground truth (true state, per-frame object visibility) and the navigation grid, and follows
+/// nav/neck goals.
 pub fn sim_node(args: &RunArgs, cfg: &Config) -> Result<(), HostError> {
     let stop = host::stop_on_signals()?;
     let scene = Scene::builtin_or_load(&args.scene)?;
@@ -39,6 +42,7 @@ struct SimHost {
     dets: Publisher<Detections>,
     state_pub: Publisher<RobotState>,
     truth_pub: Publisher<RobotState>,
+    vis_pub: Publisher<FrameVisibility>,
     grid_pub: Publisher<OccupancyGrid>,
     nav_sub: Subscriber<NavGoal>,
     neck_sub: Subscriber<NeckGoal>,
@@ -65,6 +69,7 @@ impl SimHost {
             dets: ctx.publisher(topics::DETECTIONS)?,
             state_pub: ctx.publisher(topics::STATE)?,
             truth_pub: ctx.publisher(topics::TRUTH)?,
+            vis_pub: ctx.publisher(topics::VISIBILITY)?,
             grid_pub: ctx.publisher(topics::NAV_GRID)?,
             nav_sub: ctx.subscriber(topics::NAV_GOAL)?,
             neck_sub: ctx.subscriber(topics::NECK_GOAL)?,
@@ -105,6 +110,11 @@ impl NodeHost for SimHost {
             let sent = frame.send(host::stamp(clock, t))?;
             det.frame_seq = sent.seq;
             det.send(host::stamp(clock, t))?;
+            // Ground truth for the launcher's non-occlusion metric (2 KB).
+            let mut vis = self.vis_pub.loan()?;
+            *vis = *sim.visibility();
+            vis.frame_seq = sent.seq;
+            vis.send(host::stamp(clock, t))?;
             self.next_cam += self.cam_ns;
         }
         let mut s = self.state_pub.loan()?;

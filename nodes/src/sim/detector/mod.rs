@@ -42,7 +42,7 @@ mod silhouette;
 #[cfg(test)]
 mod tests;
 
-pub(super) use silhouette::POLY_CAP;
+pub(super) use silhouette::{POLY_CAP, RIM_EQUAL_AREA, Silhouettes};
 
 use super::config::DetectorConfig;
 use super::scene::{Room, Scene};
@@ -55,7 +55,7 @@ use rayon::prelude::*;
 use shm_types::{
     ClassId, Detection, Detections, MAX_DETECTIONS, MAX_OBJECTS, MAX_PIXELS, mask_mode,
 };
-use silhouette::Silhouettes;
+use silhouette::rim_circumscribed;
 
 /// Image area the configured pixel counts refer to (640×480).
 const REF_PIXELS: f32 = 640.0 * 480.0;
@@ -151,6 +151,8 @@ pub struct Detector {
     room: Room,
     silhouettes: Silhouettes,
     stats: Vec<Stat>,
+    /// Visible pixels per scene object in the latest frame (kept past the masks pass).
+    visible: Vec<u32>,
     cands: Vec<Cand>,
     scratch: Vec<u8>,
 }
@@ -192,9 +194,10 @@ impl Detector {
             fp_on,
             fp_wall: ids(&cfg.fp_wall_classes),
             room: scene.room,
-            silhouettes: Silhouettes::new(scene),
+            silhouettes: Silhouettes::new(scene, rim_circumscribed()),
             class_ids,
             stats: vec![Stat::default(); MAX_OBJECTS + 1],
+            visible: vec![0; scene.objects.len()],
             cands: Vec::with_capacity(MAX_OBJECTS + 64),
             scratch: vec![0; MAX_PIXELS],
         }
@@ -241,6 +244,9 @@ impl Detector {
                 }
                 x0 += run;
             }
+        }
+        for (v, s) in self.visible.iter_mut().zip(&self.stats[1..]) {
+            *v = s.pixels;
         }
 
         // 2. Per object: miss, score, class, box.
@@ -365,6 +371,14 @@ impl Detector {
         if self.cfg.masks() {
             self.write_masks(instance, w, h, count, out);
         }
+    }
+
+    /// Visible pixels per scene object in the instance image of the latest [`detect`]
+    /// (ground truth, for evaluation: the non-occlusion metric).
+    ///
+    /// [`detect`]: Self::detect
+    pub fn visible_pixels(&self) -> &[u32] {
+        &self.visible
     }
 
     /// The class reported for object `k` seen from `cam_pos`: its own, or with probability

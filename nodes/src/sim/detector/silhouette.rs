@@ -1,4 +1,6 @@
-//! Unoccluded image silhouettes of scene objects (for the visible fraction).
+//! Unoccluded image silhouettes of scene objects (for the visible fraction): the detector's
+//! area estimate ([`Silhouettes::area`]) and the pixel count of the non-occlusion metric
+//! ([`Silhouettes::pixels`]).
 
 use super::super::scene::{Scene, Shape};
 use crate::geom::{Camera, convex_hull_into};
@@ -9,13 +11,25 @@ const SIL_POINTS: usize = 32;
 /// Capacity of the clipped hull polygon.
 pub(in crate::sim) const POLY_CAP: usize = SIL_POINTS + 8;
 
+/// Divisor of a cylinder's radius giving the radius of its rim 16-gon: the circumscribed
+/// 16-gon (`cos(π/16)`; the hull never under-covers the disc), for the detector's area estimate.
+pub(in crate::sim) fn rim_circumscribed() -> f32 {
+    (std::f32::consts::PI / 16.0).cos()
+}
+
+/// Divisor of a cylinder's radius giving a rim 16-gon with the disc's area
+/// (`R² = 2πr² / (16 sin(π/8))`, R = 1.0130016 r): its pixel count matches the rendered
+/// disc's up to rasterization, for the non-occlusion metric.
+pub(in crate::sim) const RIM_EQUAL_AREA: f32 = 1.0 / 1.013_001_6;
+
 /// The 3D outline points of every scene object.
 #[derive(Debug, Clone)]
-pub(super) struct Silhouettes(Vec<([Vec3; SIL_POINTS], usize)>);
+pub(in crate::sim) struct Silhouettes(Vec<([Vec3; SIL_POINTS], usize)>);
 
 impl Silhouettes {
-    /// Outline points of `scene`'s objects.
-    pub(super) fn new(scene: &Scene) -> Self {
+    /// Outline points of `scene`'s objects; a cylinder's rims are 16-gons of radius
+    /// its radius / `rim_divisor`.
+    pub(in crate::sim) fn new(scene: &Scene, rim_divisor: f32) -> Self {
         Self(
             scene
                 .objects
@@ -33,10 +47,9 @@ impl Silhouettes {
                             let r = o.size.x * 0.5;
                             let h = o.size.z * 0.5;
                             let rot = Mat3::from_rotation_z(o.yaw);
+                            let rr = r / rim_divisor;
                             for (i, p) in pts.iter_mut().enumerate() {
                                 let a = (i / 2) as f32 * std::f32::consts::TAU / 16.0;
-                                // Circumscribed 16-gon so the hull does not under-cover the disc.
-                                let rr = r / (std::f32::consts::PI / 16.0).cos();
                                 let z = if i % 2 == 0 { h } else { -h };
                                 *p = o.center + rot * Vec3::new(a.cos() * rr, a.sin() * rr, z);
                             }
@@ -52,6 +65,74 @@ impl Silhouettes {
     /// Image area (pixels²) of object `k`'s unoccluded silhouette clipped to the image, `None`
     /// when part of it is behind or at the camera (then it is not estimated).
     pub(super) fn area(&self, k: usize, camera: &Camera, cam_from_world: &Affine3A) -> Option<f32> {
+        let mut hull = [Vec2::ZERO; POLY_CAP];
+        let m = self.hull(k, camera, cam_from_world, &mut hull)?;
+        Some(clipped_area(
+            &hull[..m],
+            Vec2::new(camera.width as f32, camera.height as f32),
+        ))
+    }
+
+    /// Pixels of the image whose centre lies inside object `k`'s unoccluded silhouette (the
+    /// pixels an unoccluded render would give it: exact for a box, whose silhouette is the hull
+    /// of its corners), and whether the silhouette reaches past the image border; `None` when
+    /// part of it is behind or at the camera. Work: one scanline per image row it covers.
+    pub(in crate::sim) fn pixels(
+        &self,
+        k: usize,
+        camera: &Camera,
+        cam_from_world: &Affine3A,
+    ) -> Option<(u32, bool)> {
+        let mut hull = [Vec2::ZERO; POLY_CAP];
+        let m = self.hull(k, camera, cam_from_world, &mut hull)?;
+        let poly = &hull[..m];
+        let (w, h) = (camera.width as f32, camera.height as f32);
+        let (lo, hi) = poly.iter().fold(
+            (Vec2::splat(f32::INFINITY), Vec2::splat(f32::NEG_INFINITY)),
+            |(lo, hi), p| (lo.min(*p), hi.max(*p)),
+        );
+        let truncated = lo.x < 0.0 || lo.y < 0.0 || hi.x > w || hi.y > h;
+        // Rows whose centre y + ½ lies in [lo.y, hi.y], within the image.
+        let v0 = (lo.y - 0.5).ceil().max(0.0) as u32;
+        let v1 = (hi.y - 0.5).floor().min(h - 1.0);
+        if m < 3 || v1 < 0.0 {
+            return Some((0, truncated));
+        }
+        let mut count = 0u32;
+        for v in v0..=v1 as u32 {
+            let y = v as f32 + 0.5;
+            // The convex polygon's span on this scanline.
+            let (mut xl, mut xr) = (f32::INFINITY, f32::NEG_INFINITY);
+            for i in 0..m {
+                let (p, q) = (poly[i], poly[(i + 1) % m]);
+                if (p.y <= y) != (q.y <= y) {
+                    let x = p.x + (y - p.y) / (q.y - p.y) * (q.x - p.x);
+                    xl = xl.min(x);
+                    xr = xr.max(x);
+                }
+            }
+            if xl > xr {
+                continue;
+            }
+            // Columns whose centre u + ½ lies in [xl, xr], within the image.
+            let u0 = (xl - 0.5).ceil().max(0.0);
+            let u1 = (xr - 0.5).floor().min(w - 1.0);
+            if u1 >= u0 {
+                count += (u1 - u0) as u32 + 1;
+            }
+        }
+        Some((count, truncated))
+    }
+
+    /// Object `k`'s projected outline hull into `hull` (its vertex count), `None` when a point is
+    /// behind or at the camera.
+    fn hull(
+        &self,
+        k: usize,
+        camera: &Camera,
+        cam_from_world: &Affine3A,
+        hull: &mut [Vec2; POLY_CAP],
+    ) -> Option<usize> {
         let (pts, n) = self.0.get(k)?;
         let mut img = [Vec2::ZERO; SIL_POINTS];
         for (q, p) in img.iter_mut().zip(&pts[..*n]) {
@@ -61,12 +142,7 @@ impl Silhouettes {
             }
             *q = camera.project(pc)?;
         }
-        let mut hull = [Vec2::ZERO; POLY_CAP];
-        let m = convex_hull_into(&mut img[..*n], &mut hull);
-        Some(clipped_area(
-            &hull[..m],
-            Vec2::new(camera.width as f32, camera.height as f32),
-        ))
+        Some(convex_hull_into(&mut img[..*n], hull))
     }
 }
 
