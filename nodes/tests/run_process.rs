@@ -88,6 +88,12 @@ fn multi_process_run_terminates_and_matches_lockstep_quality() {
     ]);
     let l = metrics(&lock);
     assert_eq!(m["recall"], l["recall"], "live {m}\nlockstep {l}");
+    // Both hosts measure non-occlusion on ground truth (the live one through `sim/visibility`).
+    for v in [&m, &l] {
+        let n = v["non_occlusion"].as_f64().unwrap_or(0.0);
+        assert!(n > 0.0 && n <= 1.0, "live {m}\nlockstep {l}");
+        assert!(v["non_occlusion_samples"].as_u64().unwrap_or(0) > 0, "{v}");
+    }
     let cde = |v: &serde_json::Value| v["cde_m"].as_f64().unwrap();
     // Live timing differs from lockstep, so the paths differ too (a single session's CDE ranges
     // ~0.006–0.04 m over seeds on this scene): both must reach the same quality band.
