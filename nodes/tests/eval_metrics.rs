@@ -286,6 +286,7 @@ fn metrics_json_has_the_design_keys() {
         "assigned",
         "non_occlusion_samples",
         "non_occlusion_frames",
+        "non_occlusion_eq21",
         "planner_h_iou",
         "planner_h_iou_gbv",
         "planner_h_iou_lbv",

@@ -885,7 +885,7 @@ impl Validate for PlannerDecision {
 
 /// How much of one ground-truth object a rendered frame shows (one entry of
 /// [`FrameVisibility`]). Ground truth: for evaluation only.
-#[derive(Debug, Clone, Copy, Default, PartialEq, Eq, ZeroCopySend)]
+#[derive(Debug, Clone, Copy, Default, PartialEq, ZeroCopySend)]
 #[repr(C)]
 #[type_name("vpsom::ObjectVisibility")]
 pub struct ObjectVisibility {
@@ -899,6 +899,9 @@ pub struct ObjectVisibility {
     pub truncated: u8,
     /// Padding, always 0.
     pub reserved: [u8; 3],
+    /// Bounding box `[u0, v0, u1, v1]` (pixels) of the unoccluded silhouette, clipped to the
+    /// image: the true `b_i` of eq. (21).
+    pub bbox: [f32; 4],
 }
 
 /// Per rendered frame, the visibility of every ground-truth foreground object in the camera's
@@ -932,7 +935,13 @@ impl Validate for FrameVisibility {
         let c = Checker {
             message: "FrameVisibility",
         };
-        c.count("count", self.count as usize, MAX_OBJECTS)
+        c.count("count", self.count as usize, MAX_OBJECTS)?;
+        for (k, v) in self.items().iter().enumerate() {
+            if v.bbox.iter().any(|x| !x.is_finite()) {
+                c.finite(&format!("items[{k}].bbox"), &v.bbox)?;
+            }
+        }
+        Ok(())
     }
 }
 
@@ -1010,8 +1019,8 @@ mod tests {
         assert_eq!(size_of::<DeadlineEvent>(), 24 + 56 + 8 + THREAD_NAME_LEN);
         assert_eq!(size_of::<Candidate>(), 60);
         assert_eq!(size_of::<PlannerDecision>(), 56 + 60 * MAX_CANDIDATES);
-        assert_eq!(size_of::<ObjectVisibility>(), 16);
-        assert_eq!(size_of::<FrameVisibility>(), 24 + 16 + 16 * MAX_OBJECTS);
+        assert_eq!(size_of::<ObjectVisibility>(), 32);
+        assert_eq!(size_of::<FrameVisibility>(), 24 + 16 + 32 * MAX_OBJECTS);
         assert_eq!(align_of::<ObjectMap>(), 8);
     }
 

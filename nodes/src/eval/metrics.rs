@@ -238,6 +238,10 @@ pub struct Metrics {
     /// Rendered frames with at least one foreground object in view.
     #[serde(default)]
     pub non_occlusion_frames: u64,
+    /// Eq. 21 on the true boxes of the same (frame, object) pairs: the paper's Table 2
+    /// definition (`eval::occlusion`); null if no frame had an object in view.
+    #[serde(default)]
+    pub non_occlusion_eq21: Option<f64>,
     /// The planner's own H_IoU (eq. 21, on its estimated cuboids) of its chosen views (GBV and
     /// LBV), pooled over (view, object); null if no chosen view saw an object. Secondary: it is
     /// 0 when the H_IoU term is ablated.
@@ -493,6 +497,7 @@ impl SessionLog {
             assigned: fg.assigned,
             non_occlusion_samples: self.non_occlusion.samples,
             non_occlusion_frames: self.non_occlusion.frames_with_objects,
+            non_occlusion_eq21: self.non_occlusion.mean_eq21(),
             planner_h_iou: self.h_iou_all.mean(),
             planner_h_iou_gbv: self.h_iou_gbv.mean(),
             planner_h_iou_lbv: self.h_iou_lbv.mean(),

@@ -23,6 +23,14 @@
 //! not, and eq. 21 ignores occluders that are not foreground objects). The planner's own H_IoU
 //! of its chosen views is reported apart (`planner_h_iou*` in `metrics.json`).
 //!
+//! **Eq. 21 on true boxes** (`non_occlusion_eq21`, the paper's Table 2 definition: "the average
+//! non-occlusion degree of the objects from all NBV perspectives according to (21)"), over the
+//! same (frame, object) pairs: `b_i` is the bounding box of object `i`'s unoccluded silhouette
+//! clipped to the image, the sum runs over every other foreground object in view (nearer or not,
+//! as eq. 21 has it), and the value is clamped to [0, 1]. Boxes overlap where silhouettes do
+//! not, and background objects and walls do not occlude in it, so it reads lower than the
+//! visible fraction where objects crowd, and higher where a table hides them.
+//!
 //! The record is computed by the simulator during `Sim::render` (`Sim::visibility`) and reaches
 //! the metric the same way in both hosts: the lockstep host feeds it per rendered frame, the
 //! deployment host's sim node publishes it on `sim/visibility` and the launcher feeds it.
@@ -47,6 +55,38 @@ pub struct NonOcclusion {
     pub frames: u64,
     /// Frames with at least one object in view.
     pub frames_with_objects: u64,
+    /// Sum of the per-(frame, object) eq. 21 values on true boxes.
+    pub eq21_sum: f64,
+}
+
+/// Area of a box `[u0, v0, u1, v1]`.
+fn area(b: &[f32; 4]) -> f64 {
+    f64::from((b[2] - b[0]).max(0.0)) * f64::from((b[3] - b[1]).max(0.0))
+}
+
+/// Eq. 21 for item `i` of a frame: `1 − Σ_{j≠i} |b_i ∩ b_j| / |b_i|`, clamped to [0, 1];
+/// `None` for an empty box.
+pub fn eq21_non_occlusion(items: &[ObjectVisibility], i: usize) -> Option<f64> {
+    let bi = &items[i].bbox;
+    let a = area(bi);
+    if a <= 0.0 {
+        return None;
+    }
+    let overlap: f64 = items
+        .iter()
+        .enumerate()
+        .filter(|&(j, _)| j != i)
+        .map(|(_, o)| {
+            let b = &o.bbox;
+            area(&[
+                bi[0].max(b[0]),
+                bi[1].max(b[1]),
+                bi[2].min(b[2]),
+                bi[3].min(b[3]),
+            ])
+        })
+        .sum();
+    Some((1.0 - overlap / a).clamp(0.0, 1.0))
 }
 
 impl NonOcclusion {
@@ -54,10 +94,13 @@ impl NonOcclusion {
     pub fn observe(&mut self, frame: &FrameVisibility) {
         self.frames += 1;
         let before = self.samples;
-        for v in frame.items() {
+        let items = frame.items();
+        for (i, v) in items.iter().enumerate() {
             if let Some(x) = object_non_occlusion(v) {
                 self.sum += x;
                 self.samples += 1;
+                // A non-empty silhouette has a non-empty box; 1 if it had none.
+                self.eq21_sum += eq21_non_occlusion(items, i).unwrap_or(1.0);
             }
         }
         self.frames_with_objects += u64::from(self.samples > before);
@@ -66,6 +109,11 @@ impl NonOcclusion {
     /// Mean over (frame, object) pairs; `None` if no frame had an object in view.
     pub fn mean(&self) -> Option<f64> {
         (self.samples > 0).then(|| self.sum / self.samples as f64)
+    }
+
+    /// Mean eq. 21 value on true boxes over the same pairs; `None` if no frame had an object.
+    pub fn mean_eq21(&self) -> Option<f64> {
+        (self.samples > 0).then(|| self.eq21_sum / self.samples as f64)
     }
 }
 
@@ -102,5 +150,34 @@ mod tests {
         assert!((acc.mean().unwrap() - 0.5).abs() < 1e-12);
         assert_eq!(NonOcclusion::default().mean(), None);
         assert_eq!(object_non_occlusion(&item(3, 0)), None);
+    }
+
+    #[test]
+    fn eq21_sums_box_overlaps_with_every_other_object() {
+        let boxed = |bbox| ObjectVisibility {
+            visible_px: 1,
+            silhouette_px: 1,
+            bbox,
+            ..Default::default()
+        };
+        // b0 = 10×10; b1 covers its right half, b2 its bottom-left quarter: 1 − (50 + 25)/100.
+        let items = [
+            boxed([0.0, 0.0, 10.0, 10.0]),
+            boxed([5.0, 0.0, 20.0, 10.0]),
+            boxed([0.0, 5.0, 5.0, 10.0]),
+        ];
+        assert!((eq21_non_occlusion(&items, 0).unwrap() - 0.25).abs() < 1e-12);
+        // b2 (25 px) lies inside b0 entirely: clamped to 0, not negative.
+        assert_eq!(eq21_non_occlusion(&items, 2), Some(0.0));
+        // b1 (150 px) overlaps b0 by 50: 1 − 50/150.
+        assert!((eq21_non_occlusion(&items, 1).unwrap() - 2.0 / 3.0).abs() < 1e-12);
+        assert_eq!(eq21_non_occlusion(&[boxed([1.0, 1.0, 1.0, 5.0])], 0), None);
+        let mut f = boxed_zeroed::<FrameVisibility>();
+        f.count = 3;
+        f.items[..3].copy_from_slice(&items);
+        let mut acc = NonOcclusion::default();
+        acc.observe(&f);
+        let want = (0.25 + 2.0 / 3.0 + 0.0) / 3.0;
+        assert!((acc.mean_eq21().unwrap() - want).abs() < 1e-12);
     }
 }

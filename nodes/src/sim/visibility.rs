@@ -76,7 +76,7 @@ impl VisibilityModel {
             if !(z > 0.0 && z <= camera.k.max_range) || n == MAX_OBJECTS {
                 continue;
             }
-            let Some((silhouette_px, truncated)) =
+            let Some((silhouette_px, truncated, bbox)) =
                 self.silhouettes.pixels(k, camera, &cam_from_world)
             else {
                 continue;
@@ -90,6 +90,7 @@ impl VisibilityModel {
                 silhouette_px,
                 truncated: u8::from(truncated),
                 reserved: [0; 3],
+                bbox,
             };
             n += 1;
         }

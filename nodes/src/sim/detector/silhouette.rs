@@ -82,7 +82,7 @@ impl Silhouettes {
         k: usize,
         camera: &Camera,
         cam_from_world: &Affine3A,
-    ) -> Option<(u32, bool)> {
+    ) -> Option<(u32, bool, [f32; 4])> {
         let mut hull = [Vec2::ZERO; POLY_CAP];
         let m = self.hull(k, camera, cam_from_world, &mut hull)?;
         let poly = &hull[..m];
@@ -92,11 +92,12 @@ impl Silhouettes {
             |(lo, hi), p| (lo.min(*p), hi.max(*p)),
         );
         let truncated = lo.x < 0.0 || lo.y < 0.0 || hi.x > w || hi.y > h;
+        let bbox = [lo.x.max(0.0), lo.y.max(0.0), hi.x.min(w), hi.y.min(h)];
         // Rows whose centre y + ½ lies in [lo.y, hi.y], within the image.
         let v0 = (lo.y - 0.5).ceil().max(0.0) as u32;
         let v1 = (hi.y - 0.5).floor().min(h - 1.0);
         if m < 3 || v1 < 0.0 {
-            return Some((0, truncated));
+            return Some((0, truncated, bbox));
         }
         let mut count = 0u32;
         for v in v0..=v1 as u32 {
@@ -121,7 +122,7 @@ impl Silhouettes {
                 count += (u1 - u0) as u32 + 1;
             }
         }
-        Some((count, truncated))
+        Some((count, truncated, bbox))
     }
 
     /// Object `k`'s projected outline hull into `hull` (its vertex count), `None` when a point is
