@@ -171,8 +171,9 @@ impl VpsomPlanner {
         let eps = self.cfg.eps_sopm;
         let (sides, closed) = (&self.session.sides, &self.closed);
         let open = |c: &ClusterInfo| {
-            !(c.done || c.foreground == 0 && sides.sides(c.id) >= self.min_sides())
-                && !self.give_ups.settled(map, c)
+            !(c.done
+                || self.give_ups.settled(map, c)
+                || c.foreground == 0 && sides.sides(c.id) >= self.min_sides())
         };
         let tracked = self
             .tracked
