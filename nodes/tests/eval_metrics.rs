@@ -295,6 +295,8 @@ fn metrics_json_has_the_design_keys() {
         "match_params",
         "background",
         "per_object",
+        "objects_given_up",
+        "explored",
     ];
     assert_eq!(keys.len(), REQUIRED_KEYS.len() + extras.len(), "{keys:?}");
     assert!(extras.iter().all(|k| keys.contains(k)));

@@ -275,11 +275,15 @@ pub fn run_session(
     let summary = finished.unwrap_or_else(|| planner.summary());
     let terminated = summary.status == planner::PlannerStatus::Terminated;
     let reason = match finished {
-        Some(s) => format!("{:?}", s.status),
+        Some(s) => s.reason(),
         None => format!("time limit {} s", spec.max_sim_s),
     };
     mapper.write_map(&mut map, end);
     log.finish(end, terminated, &reason);
+    log.planner_outcome(
+        summary.explored,
+        given_up_entries(&planner.given_up_objects()),
+    );
     let gt = ground_truth(&spec.scene);
     let run = RunInfo {
         scene: spec.scene.name.clone(),
@@ -303,6 +307,19 @@ pub fn run_session(
         recorded,
         recorder,
     })
+}
+
+/// The planner's given-up objects as `metrics.json` lists them.
+pub fn given_up_entries(objs: &[planner::GivenUpObject]) -> Vec<eval::GivenUpEntry> {
+    objs.iter()
+        .map(|g| eval::GivenUpEntry {
+            map_id: g.map_id,
+            cluster_id: g.cluster_id,
+            label: g.label.to_string(),
+            h_sopm: g.h_sopm,
+            cause: g.cause.name().to_string(),
+        })
+        .collect()
 }
 
 fn progress_of(t: u64, map: &ObjectMap, planner: &dyn ViewPlanner) -> Progress {

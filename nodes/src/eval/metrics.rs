@@ -268,6 +268,29 @@ pub struct Metrics {
     /// Outcome per ground-truth object, foreground first, then background.
     #[serde(default)]
     pub per_object: Vec<ObjectMatch>,
+    /// Foreground objects the planner gave up (VP-SOM: H_sopm stopped falling, or the cluster
+    /// ran out of views), with their last H_sopm.
+    #[serde(default)]
+    pub objects_given_up: Vec<GivenUpEntry>,
+    /// Whether the room was explored (no reachable frontier left) when the planner ended; null
+    /// if the host did not say.
+    #[serde(default)]
+    pub explored: Option<bool>,
+}
+
+/// A foreground object the planner gave up, as `metrics.json` lists it.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+pub struct GivenUpEntry {
+    /// Map object id.
+    pub map_id: u32,
+    /// Its cluster (background object id).
+    pub cluster_id: i32,
+    /// COCO class name.
+    pub label: String,
+    /// H_sopm when given up.
+    pub h_sopm: f32,
+    /// Why (e.g. "entropy stalled").
+    pub cause: String,
 }
 
 /// The keys `DESIGN.md` requires in `metrics.json`.
@@ -337,6 +360,8 @@ pub struct SessionLog {
     h_iou_lbv: Pooled,
     gbv: Vec<ViewPose>,
     lbv: Vec<ViewPose>,
+    given_up: Vec<GivenUpEntry>,
+    explored: Option<bool>,
 }
 
 impl SessionLog {
@@ -445,6 +470,13 @@ impl SessionLog {
         self.reason = reason.to_string();
     }
 
+    /// What the planner reported at its end: whether the room was explored and the objects it
+    /// gave up (kept in `metrics.json`).
+    pub fn planner_outcome(&mut self, explored: bool, given_up: Vec<GivenUpEntry>) {
+        self.explored = Some(explored);
+        self.given_up = given_up;
+    }
+
     /// Length of the true base path so far, metres.
     pub fn path_length_m(&self) -> f64 {
         self.path_length_m
@@ -506,6 +538,8 @@ impl SessionLog {
             match_params: *params,
             background: Some(bg),
             per_object,
+            objects_given_up: self.given_up.clone(),
+            explored: self.explored,
         }
     }
 

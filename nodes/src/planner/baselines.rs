@@ -2,9 +2,11 @@
 //!
 //! - [`CoveragePlanner`]: circles every cluster once (see [`crate::planner::coverage`]) in order
 //!   of first sighting, neck always on the centre of the cluster being circled (or, on the way
-//!   to the first waypoint, of the next cluster). Before any cluster is known it behaves like
-//!   VP-SOM's bootstrap (look around, then frontier goals). Ends (`Terminated`) once every
-//!   known cluster has been circled; clusters without a reachable waypoint are given up and
+//!   to the first waypoint, of the next cluster). Whenever no cluster is left to circle (before,
+//!   between and after its circles) it explores as VP-SOM does (look around before the first
+//!   cluster, then frontier goals with the neck sweeping; a frontier goal is superseded as soon
+//!   as an uncircled cluster appears). Ends (`Terminated`) once every known cluster has been
+//!   circled and the room is explored; clusters without a reachable waypoint are given up and
 //!   make the end `NoCandidates`.
 //! - [`FrontierPlanner`]: Yamauchi frontier exploration (see [`crate::planner::frontier`]),
 //!   neck fixed forward (yaw 0); ends (`Terminated`) when no reachable frontier remains.
@@ -25,8 +27,8 @@ use crate::planner::coverage::{CoverageJob, CoverageParams};
 use crate::planner::evaluate::{EvalParams, Scoring, Weights};
 use crate::planner::reach::NavParams;
 use crate::planner::session::{
-    Back, JobOutput, LookAround, Outcome, PlannerInputs, PlannerJob, PlannerStatus, Session, Step,
-    Summary, ViewPlanner, chosen_decision, neck_goal_for,
+    Back, ExploreSweep, JobOutput, LookAround, Outcome, PlannerInputs, PlannerJob, PlannerStatus,
+    Session, Step, Summary, ViewPlanner, chosen_decision, neck_goal_for,
 };
 use shm_types::{Candidate, NeckGoal, ObjectMap, PlannerDecision, RobotState, goal_kind};
 use std::collections::VecDeque;
@@ -49,13 +51,17 @@ pub struct CoveragePlanner {
     mount: CameraMount,
     session: Session,
     look: LookAround,
+    sweep: ExploreSweep,
+    /// Whether the newest chassis round was a frontier round.
+    exploring: bool,
     /// Waypoints left on the current circle, with their views.
     queue: VecDeque<([f32; 3], Candidate)>,
     /// `header.seq` of the map the circle was planned on.
     circle_map_seq: u64,
     current: Option<ClusterInfo>,
     circled: Vec<i32>,
-    exploring: bool,
+    /// Circled or given up (the neck's skip list; fixed capacity).
+    skip: Vec<i32>,
 }
 
 impl CoveragePlanner {
@@ -78,16 +84,18 @@ impl CoveragePlanner {
                 cfg.bootstrap.look_around_steps,
                 cfg.bootstrap.neck_tolerance_deg.to_radians(),
             ),
+            sweep: ExploreSweep::new(cfg),
+            exploring: false,
             queue: VecDeque::new(),
             circle_map_seq: 0,
             current: None,
             circled: Vec::with_capacity(shm_types::MAX_OBJECTS),
-            exploring: false,
+            skip: Vec::with_capacity(2 * shm_types::MAX_OBJECTS),
         }
     }
 
-    fn finish(&mut self, now_ns: u64) -> Step {
-        let status = if self.session.given_up.is_empty() {
+    fn finish(&mut self, any_cluster: bool, now_ns: u64) -> Step {
+        let status = if any_cluster && self.session.given_up.is_empty() {
             PlannerStatus::Terminated
         } else {
             PlannerStatus::NoCandidates
@@ -118,56 +126,62 @@ impl ViewPlanner for CoveragePlanner {
         if let Some(step) = self.session.begin(inputs.map) {
             return step;
         }
-        let any_cluster = inputs.map.objects().iter().any(|o| o.is_background());
-        if self.session.goals.poll(inputs.state) == Outcome::Pending
-            && !(self.exploring && any_cluster)
-        {
-            return Step::Wait;
+        let current = self.session.goals.current;
+        let outcome = self.session.goals.poll(inputs.state);
+        let all = clusters::clusters(inputs.map, self.eps_sopm, &self.session.sides, 0);
+        let given_up = &self.session.given_up;
+        let open: Vec<ClusterInfo> = all
+            .iter()
+            .filter(|c| !self.circled.contains(&c.id) && !given_up.contains(&c.id))
+            .filter(|c| self.current.is_none_or(|cur| cur.id != c.id))
+            .copied()
+            .collect();
+        self.skip.clear();
+        self.skip.extend(self.circled.iter().chain(given_up.iter()));
+        if outcome == Outcome::Pending {
+            // A waypoint is kept; a frontier goal while no cluster is left to circle.
+            let frontier = current.is_some_and(|g| g.kind == goal_kind::FRONTIER);
+            if !frontier || open.is_empty() {
+                return Step::Wait;
+            }
         }
-        self.exploring = false;
         if let Some(s) = self.next_waypoint(now_ns) {
             return s;
         }
         if let Some(c) = self.current.take() {
             self.circled.push(c.id);
             self.session.clusters_done = Some(self.circled.len() as u32);
+            // The circle showed the room from new places: look for frontiers again.
+            self.session.explored = false;
         }
-        let all = clusters::clusters(inputs.map, self.eps_sopm, &self.session.sides, 0);
-        if all.is_empty() {
-            if !self.look.swept() {
-                return Step::Wait;
-            }
+        if !open.is_empty() {
+            self.exploring = false;
+            let (params, weights) = self.scoring;
+            let job = CoverageJob {
+                nav: self.session.buffers.nav(inputs.nav),
+                base: inputs.state.base_pose,
+                clusters: open,
+                params: self.params,
+                scoring: Scoring {
+                    map: self.session.buffers.map(inputs.map),
+                    params,
+                    weights,
+                },
+            };
+            return self.session.compute(PlannerJob::Coverage(job));
+        }
+        if all.is_empty() && !self.look.swept() {
+            return Step::Wait;
+        }
+        if !self.session.explored {
             self.exploring = true;
             return self.session.frontier_job(inputs);
         }
-        let given_up = &self.session.given_up;
-        let open: Vec<ClusterInfo> = all
-            .into_iter()
-            .filter(|c| !self.circled.contains(&c.id) && !given_up.contains(&c.id))
-            .collect();
-        if open.is_empty() {
-            return self.finish(now_ns);
-        }
-        let (params, weights) = self.scoring;
-        let job = CoverageJob {
-            nav: self.session.buffers.nav(inputs.nav),
-            base: inputs.state.base_pose,
-            clusters: open,
-            params: self.params,
-            scoring: Scoring {
-                map: self.session.buffers.map(inputs.map),
-                params,
-                weights,
-            },
-        };
-        self.session.compute(PlannerJob::Coverage(job))
+        self.finish(!all.is_empty(), now_ns)
     }
 
     fn job_done(&mut self, output: JobOutput, now_ns: u64) -> Step {
-        let r = match self
-            .session
-            .job_back(output, now_ns, PlannerStatus::NoCandidates)
-        {
+        let r = match self.session.job_back(output, now_ns) {
             Back::Coverage(r) => r,
             other => return self.session.discard(other),
         };
@@ -181,11 +195,12 @@ impl ViewPlanner for CoveragePlanner {
                 self.queue = c.waypoints.into_iter().zip(c.views).collect();
                 self.next_waypoint(now_ns).unwrap_or(Step::Wait)
             }
-            None => self.finish(now_ns),
+            // No cluster left with a reachable waypoint: explore (or end) on the next call.
+            None => Step::Wait,
         }
     }
 
-    fn neck_goal(&mut self, map: &ObjectMap, state: &RobotState, _now_ns: u64) -> NeckGoal {
+    fn neck_goal(&mut self, map: &ObjectMap, state: &RobotState, now_ns: u64) -> NeckGoal {
         let mut goal = neck_goal_for(map, self.mount.pitch());
         let centre = self.current.map(|c| c.center).or_else(|| {
             clusters::first_unfinished(
@@ -193,12 +208,13 @@ impl ViewPlanner for CoveragePlanner {
                 self.eps_sopm,
                 &self.session.sides,
                 usize::MAX,
-                &self.circled,
+                &self.skip,
             )
             .map(|c| c.center)
         });
         goal.yaw = match centre {
             Some(c) => self.mount.neck_yaw_toward(state.base_pose, c),
+            None if self.exploring => self.sweep.yaw(now_ns),
             None => self.look.target(state.neck_yaw),
         };
         goal
@@ -253,10 +269,10 @@ impl ViewPlanner for FrontierPlanner {
     }
 
     fn job_done(&mut self, output: JobOutput, now_ns: u64) -> Step {
-        let back = self
-            .session
-            .job_back(output, now_ns, PlannerStatus::Terminated);
-        self.session.discard(back)
+        match self.session.job_back(output, now_ns) {
+            Back::Explored => self.session.finish(PlannerStatus::Terminated, now_ns),
+            back => self.session.discard(back),
+        }
     }
 
     fn neck_goal(&mut self, map: &ObjectMap, _state: &RobotState, _now_ns: u64) -> NeckGoal {

@@ -181,6 +181,11 @@ pub struct BootstrapConfig {
     /// A cluster with no foreground object yet is done once its centre was in view from this
     /// many distinct sectors.
     pub empty_cluster_sectors: usize,
+    /// While exploring (the base driving to frontiers) the neck sweeps
+    /// `amplitude · sin(2π t / period)` about the base's heading: amplitude, degrees.
+    pub explore_neck_amplitude_deg: f32,
+    /// Period of that sweep, seconds (peak neck rate 2π · amplitude / period).
+    pub explore_neck_period_s: f32,
 }
 
 impl Default for BootstrapConfig {
@@ -214,12 +219,34 @@ pub struct FrontierConfig {
     /// Frontier cells within this distance of an earlier frontier goal are ignored, metres
     /// (a frontier that survives a visit cannot be cleared from there).
     pub blacklist_radius: f32,
+    /// Information weight: a frontier's length (metres of frontier cells) counts as this many
+    /// metres less path, so that large frontiers win over slightly nearer small ones.
+    pub gain_weight: f32,
 }
 
 impl Default for FrontierConfig {
     /// The `[planner.frontier]` section of the built-in `config/default.toml`.
     fn default() -> Self {
         runtime::config::DEFAULTS.section("planner.frontier")
+    }
+}
+
+/// `[planner.give_up]`: when VP-SOM gives up an object whose entropy stops falling (see
+/// [`crate::planner::giveup`]).
+#[derive(Debug, Clone, Copy, PartialEq, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct GiveUpConfig {
+    /// Rounds N (GBV rounds aimed at the object's cluster that observed it) over which its
+    /// H_sopm must fall by `min_drop`.
+    pub rounds: usize,
+    /// Least fall δ of H_sopm over `rounds` rounds.
+    pub min_drop: f32,
+}
+
+impl Default for GiveUpConfig {
+    /// The `[planner.give_up]` section of the built-in `config/default.toml`.
+    fn default() -> Self {
+        runtime::config::DEFAULTS.section("planner.give_up")
     }
 }
 
@@ -257,8 +284,10 @@ pub struct PlannerConfig {
     pub bootstrap: BootstrapConfig,
     /// Coverage baseline.
     pub coverage: CoverageConfig,
-    /// Frontier baseline.
+    /// Frontier baseline (and every planner's exploration).
     pub frontier: FrontierConfig,
+    /// Giving up objects whose entropy stops falling.
+    pub give_up: GiveUpConfig,
     /// Term switches.
     pub ablation: AblationConfig,
 }
@@ -348,6 +377,18 @@ impl PlannerConfig {
             0,
             b.sectors,
         )?;
+        c.in_range(
+            "planner.bootstrap.explore_neck_amplitude_deg",
+            b.explore_neck_amplitude_deg.into(),
+            0.0,
+            180.0,
+        )?;
+        c.in_range(
+            "planner.bootstrap.explore_neck_period_s",
+            b.explore_neck_period_s.into(),
+            0.1,
+            1000.0,
+        )?;
         c.count(
             "planner.coverage.waypoints",
             self.coverage.waypoints,
@@ -365,6 +406,19 @@ impl PlannerConfig {
             self.frontier.blacklist_radius.into(),
             0.0,
             10.0,
+        )?;
+        c.in_range(
+            "planner.frontier.gain_weight",
+            self.frontier.gain_weight.into(),
+            0.0,
+            100.0,
+        )?;
+        c.count("planner.give_up.rounds", self.give_up.rounds, 1, 1000)?;
+        c.in_range(
+            "planner.give_up.min_drop",
+            self.give_up.min_drop.into(),
+            0.0,
+            1.0,
         )
     }
 }

@@ -4,10 +4,13 @@
 //! clusters; clusters smaller than `min_cells` are noise, and cells within `blacklist_radius` of
 //! an earlier frontier goal are ignored (a frontier that survived a visit cannot be cleared from
 //! there). For every remaining cluster the goal is its reachable cell (on the inflated navigation
-//! grid) nearest its centroid; the cluster with the shortest path wins. The goal yaw points from
+//! grid) nearest its centroid; clusters without a reachable cell are dropped, and the least
+//! `path − gain_weight × frontier length` wins (near and informative). Since every goal is
+//! blacklisted when issued (reached or refused), exploration ends: no reachable frontier is left. The goal yaw points from
 //! the robot to the goal, so a forward-fixed camera arrives looking at the frontier.
 //!
-//! Used by the frontier baseline and by VP-SOM/coverage to explore before any cluster is known.
+//! Used by the frontier baseline and by VP-SOM and coverage to explore whenever no unfinished
+//! cluster is known (before, between and after their clusters).
 
 use crate::planner::evaluate::Scoring;
 use crate::planner::reach::{NavMap, NavParams};
@@ -20,6 +23,8 @@ pub struct FrontierParams {
     pub min_cells: usize,
     /// Blacklist radius around earlier goals, metres.
     pub blacklist_radius: f32,
+    /// A frontier's length (cells × resolution) counts as this many metres less path.
+    pub gain_weight: f32,
     /// Reading of the navigation grid.
     pub nav: NavParams,
 }
@@ -30,6 +35,7 @@ impl FrontierParams {
         Self {
             min_cells: cfg.frontier.min_cells,
             blacklist_radius: cfg.frontier.blacklist_radius,
+            gain_weight: cfg.frontier.gain_weight,
             nav: NavParams::new(cfg),
         }
     }
@@ -130,13 +136,17 @@ pub fn frontiers(g: &OccupancyGrid, blacklist: &[[f32; 2]], p: &FrontierParams) 
     out
 }
 
-/// Choose the nearest reachable frontier: goal `[x, y, yaw]` and path length.
+/// Choose the reachable frontier of least cost `path length − gain_weight × frontier length`
+/// (near and informative; `gain_weight` 0: the nearest): goal `[x, y, yaw]` and path length.
+/// A frontier none of whose cells is reachable is skipped.
 pub fn choose(
     g: &OccupancyGrid,
     fronts: &[Frontier],
     nav: &NavMap,
     base: [f32; 3],
+    gain_weight: f32,
 ) -> Option<([f32; 3], f32)> {
+    let mut best_cost = f32::INFINITY;
     let mut best: Option<([f32; 2], f32)> = None;
     for f in fronts {
         let mut pick: Option<([f32; 2], f32)> = None;
@@ -152,8 +162,10 @@ pub fn choose(
         }
         if let Some((c, _)) = pick {
             let len = nav.path_length(c).unwrap_or(f32::INFINITY);
-            if best.is_none_or(|(_, bl)| len < bl) {
+            let cost = len - gain_weight * f.cells.len() as f32 * g.resolution;
+            if len.is_finite() && (best.is_none() || cost < best_cost) {
                 best = Some((c, len));
+                best_cost = cost;
             }
         }
     }
@@ -208,7 +220,7 @@ impl FrontierJob {
         let p = self.params;
         let fronts = frontiers(&self.explore, &self.blacklist, &p);
         let nav = p.nav.flooded(&self.nav, [self.base[0], self.base[1]]);
-        let goal = choose(&self.explore, &fronts, &nav, self.base);
+        let goal = choose(&self.explore, &fronts, &nav, self.base, p.gain_weight);
         let view = goal
             .zip(self.scoring.as_ref())
             .map(|((pose, _), s)| s.chosen(pose, 0.0, None));
@@ -232,6 +244,7 @@ mod tests {
         FrontierParams {
             min_cells: 3,
             blacklist_radius: 0.5,
+            gain_weight: 0.0,
             nav: NavParams {
                 robot_radius: 0.2,
                 inflated: false,
@@ -274,7 +287,7 @@ mod tests {
         let nav = boxed_zeroed::<OccupancyGrid>();
         let mut m = NavMap::new(&nav, 0.2, true);
         m.flood_from([0.2, 1.0], 0.2);
-        let (goal, len) = choose(&g, &f, &m, [0.2, 1.0, 2.0]).unwrap();
+        let (goal, len) = choose(&g, &f, &m, [0.2, 1.0, 2.0], 0.0).unwrap();
         assert!(
             (goal[0] - 0.95).abs() < 1e-5 && (goal[1] - 1.0).abs() < 0.06,
             "{goal:?}"

@@ -11,10 +11,11 @@
 //! | [`terms`] | each term of F(v): H_IoU, cos θ_sopm, co-visibility, N_cp, cos θ_c, f_a, f_c |
 //! | [`evaluate`] | F(v) of one camera pose over a map snapshot, as a traced `Candidate` |
 //! | [`clusters`] | clusters by first sighting, completion rule, sides-seen tracker |
+//! | [`giveup`] | the stall rule: objects whose entropy stops falling are given up |
 //! | [`gbv`] | global candidates on a ring, [`GbvJob`] (owned, parallel) |
 //! | [`lbv`] | [`Lbv`]: neck candidates, allocation-free |
 //! | [`reach`] | inflated navigation grid, reachability (Dijkstra) and collision |
-//! | [`frontier`], [`coverage`] | baseline algorithms as jobs |
+//! | [`frontier`], [`coverage`] | baseline algorithms as jobs (frontiers: every planner's exploration) |
 //! | [`vpsom`], [`baselines`] | the three planners (state machines) |
 //! | [`session`] | the interface: inputs, [`Step`], jobs, status, [`Summary`] |
 //! | [`synth`] | synthetic maps (scene-3-like) for benchmarks and tests |
@@ -41,17 +42,23 @@
 //! A lockstep host simply calls `job.run()` inline. Jobs own their snapshots (recycled
 //! buffers handed back through `job_done`), so the map may change while they run.
 //!
-//! # Bootstrap
-//! Before any cluster is known, VP-SOM (and coverage) look around in place (neck sweep through
-//! `bootstrap.look_around_steps` stops), then drive to frontiers of the exploration grid until a
-//! background object appears, at which point the GBV takes over (superseding the frontier goal).
+//! # Exploration
+//! Whenever no unfinished cluster is known (before the first, between clusters, after the
+//! last), VP-SOM and coverage explore: first (before any cluster) a look-around in place (neck
+//! sweep through `bootstrap.look_around_steps` stops), then frontier goals on the exploration
+//! grid ([`frontier`]: near and informative; too small, unreachable or already visited frontiers
+//! are dropped, so exploration ends), the neck sweeping. A frontier goal is superseded as soon as
+//! an unfinished cluster appears; VP-SOM's last GBV goal is superseded by exploration once no
+//! cluster needs it. The room is *explored* when a frontier round finds no reachable frontier.
 //!
-//! # Termination (section 3.4, Algorithm 2)
-//! A foreground object is done when `complete` is set or `h_sopm < eps_sopm`; a cluster when all
-//! its foreground objects are; a cluster with no foreground object yet when its centre has been
-//! in view from `bootstrap.empty_cluster_sectors` sectors. VP-SOM ends `Terminated` when every
-//! cluster is done, `NoCandidates` when no unfinished cluster has a reachable candidate (or
-//! nothing was found at all). [`Summary`] reports the counts.
+//! # Termination (section 3.4, Algorithm 2, plus exploration)
+//! A foreground object is done when `complete` is set or `h_sopm < eps_sopm`, or when VP-SOM
+//! gave it up ([`giveup`]: its entropy stopped falling, or its cluster ran out of GBV rounds or
+//! new views); a cluster when all its foreground objects are; a cluster with no foreground object
+//! yet when its centre has been in view from `bootstrap.empty_cluster_sectors` sectors. VP-SOM
+//! ends `Terminated` when every cluster is done and the room is explored, `NoCandidates` when
+//! a cluster could never be approached (no reachable candidate) or nothing was found at all.
+//! [`Summary`] reports the counts and [`Summary::reason`] the reason.
 
 pub mod baselines;
 pub mod clusters;
@@ -60,6 +67,7 @@ pub mod coverage;
 pub mod evaluate;
 pub mod frontier;
 pub mod gbv;
+pub mod giveup;
 pub mod lbv;
 pub mod reach;
 pub mod session;
@@ -69,11 +77,12 @@ pub mod vpsom;
 
 pub use baselines::{CoveragePlanner, FrontierPlanner};
 pub use config::{
-    AblationConfig, BootstrapConfig, CoverageConfig, FrontierConfig, GbvConfig, LbvConfig,
-    Occluders, PlannerConfig, PlannerKind, UnknownPlanner, UnknownTerm,
+    AblationConfig, BootstrapConfig, CoverageConfig, FrontierConfig, GbvConfig, GiveUpConfig,
+    LbvConfig, Occluders, PlannerConfig, PlannerKind, UnknownPlanner, UnknownTerm,
 };
 pub use evaluate::{EvalParams, Target, Weights, evaluate_view};
 pub use gbv::{GbvJob, GbvResult};
+pub use giveup::{GiveUpCause, GivenUpObject};
 pub use lbv::Lbv;
 pub use session::{
     JobOutput, PlannerInputs, PlannerJob, PlannerStatus, Step, Summary, ViewPlanner,

@@ -1,6 +1,7 @@
 //! The planner interface shared by VP-SOM and the baselines: inputs, steps, jobs, status and
 //! summary, plus the bookkeeping every planner needs (`Session`: status, goal ids, the job in
-//! flight, reusable snapshot buffers, frontier exploration; the bootstrap look-around).
+//! flight, reusable snapshot buffers, frontier exploration and whether the room is explored; the
+//! look-around).
 
 use crate::planner::clusters::{self, SideTracker};
 use crate::planner::config::{PlannerConfig, PlannerKind};
@@ -8,6 +9,7 @@ use crate::planner::coverage::{CoverageJob, CoverageResult};
 use crate::planner::evaluate::{EvalParams, Scoring, Weights};
 use crate::planner::frontier::{FrontierJob, FrontierParams, FrontierResult};
 use crate::planner::gbv::{GbvJob, GbvResult};
+use crate::planner::giveup::GivenUpObject;
 use shm_types::{
     Candidate, NavGoal, NeckGoal, ObjectMap, OccupancyGrid, PlannerDecision, RobotState,
     boxed_zeroed, decision_kind, goal_kind, nav_status, planner_state,
@@ -73,14 +75,50 @@ pub struct Summary {
     pub clusters: u32,
     /// Of which done (VP-SOM rule) or circled (coverage).
     pub clusters_done: u32,
-    /// Clusters given up (unreachable or out of GBV rounds).
+    /// Clusters given up without a reachable view (never approached).
     pub clusters_given_up: u32,
     /// Foreground objects in the last map seen.
     pub foreground: u32,
     /// Of which complete.
     pub foreground_done: u32,
+    /// Foreground objects given up (VP-SOM: entropy stalled or cluster out of views; see
+    /// [`crate::planner::giveup`]).
+    pub objects_given_up: u32,
+    /// Whether the room was explored: the last frontier round found no reachable frontier.
+    pub explored: bool,
     /// Time the session ended, ns.
     pub finished_ns: Option<u64>,
+}
+
+impl Summary {
+    /// Why the session ended (or "running"), for `metrics.json`'s `termination_reason`.
+    pub fn reason(&self) -> String {
+        let explored = if self.explored {
+            "explored"
+        } else {
+            "not explored"
+        };
+        match self.status {
+            PlannerStatus::Running => "running".into(),
+            PlannerStatus::Terminated => match self.kind {
+                PlannerKind::Frontier => "explored (no reachable frontier)".into(),
+                PlannerKind::Coverage => format!("every cluster circled, {explored}"),
+                PlannerKind::Vpsom if self.objects_given_up > 0 => format!(
+                    "objects given up: {} (the rest complete, {explored})",
+                    self.objects_given_up
+                ),
+                PlannerKind::Vpsom => format!("complete and {explored}"),
+            },
+            PlannerStatus::NoCandidates if self.clusters == 0 => {
+                format!("nothing found ({explored}, no cluster)")
+            }
+            PlannerStatus::NoCandidates if self.clusters_given_up > 0 => format!(
+                "no reachable candidate: clusters given up: {} ({explored})",
+                self.clusters_given_up
+            ),
+            PlannerStatus::NoCandidates => format!("no reachable candidate ({explored})"),
+        }
+    }
 }
 
 impl fmt::Display for Summary {
@@ -88,7 +126,7 @@ impl fmt::Display for Summary {
         write!(
             f,
             "{}: {:?}; goals {} ({} unreachable), rounds {}; clusters {}/{} done, {} given up; \
-             foreground {}/{} complete",
+             foreground {}/{} complete, {} given up; explored {}",
             self.kind,
             self.status,
             self.goals_issued,
@@ -98,7 +136,9 @@ impl fmt::Display for Summary {
             self.clusters,
             self.clusters_given_up,
             self.foreground_done,
-            self.foreground
+            self.foreground,
+            self.objects_given_up,
+            self.explored
         )
     }
 }
@@ -173,6 +213,11 @@ pub trait ViewPlanner: Send + fmt::Debug {
 
     /// Summary so far (final once `status()` is finished).
     fn summary(&self) -> Summary;
+
+    /// The foreground objects given up so far (VP-SOM; none for the baselines).
+    fn given_up_objects(&self) -> Vec<GivenUpObject> {
+        Vec::new()
+    }
 
     /// The trace of the newest chassis-goal decision (GBV candidates), once.
     fn take_decision(&mut self) -> Option<Box<PlannerDecision>> {
@@ -352,6 +397,29 @@ impl LookAround {
     }
 }
 
+/// The neck while exploring: `amplitude · sin(2π t / period)` about the base's heading, slow
+/// enough that a base turn on top of it keeps the camera trackable (see `[planner.bootstrap]`).
+#[derive(Debug, Clone, Copy)]
+pub(crate) struct ExploreSweep {
+    amplitude: f32,
+    period_ns: f64,
+}
+
+impl ExploreSweep {
+    pub(crate) fn new(cfg: &PlannerConfig) -> Self {
+        Self {
+            amplitude: cfg.bootstrap.explore_neck_amplitude_deg.to_radians(),
+            period_ns: f64::from(cfg.bootstrap.explore_neck_period_s) * 1e9,
+        }
+    }
+
+    /// The neck yaw at time `now_ns`.
+    pub(crate) fn yaw(&self, now_ns: u64) -> f32 {
+        let phase = (now_ns as f64 / self.period_ns).fract() * std::f64::consts::TAU;
+        self.amplitude * phase.sin() as f32
+    }
+}
+
 /// The bookkeeping every planner shares: status and summary, goal ids, the planning job in
 /// flight, recycled snapshot buffers, the sides tracker and frontier exploration (VP-SOM's and
 /// coverage's bootstrap, the frontier baseline's only mode). Each planner keeps only its own
@@ -371,6 +439,11 @@ pub(crate) struct Session {
     pub(crate) given_up: Vec<i32>,
     /// Overrides the map-derived `clusters_done` (coverage: clusters circled).
     pub(crate) clusters_done: Option<u32>,
+    /// Objects given up (set by the planner).
+    pub(crate) objects_given_up: u32,
+    /// The newest frontier round found no reachable frontier (cleared by a planner whose base
+    /// has since gone elsewhere, so that the next exploration looks again).
+    pub(crate) explored: bool,
     /// Evaluate the view of every frontier goal (the frontier baseline, whose NBVs they are).
     pub(crate) score_frontiers: Option<(EvalParams, Weights)>,
     /// The trace of the newest chassis-goal decision, until the host takes it.
@@ -395,6 +468,8 @@ impl Session {
             sides: SideTracker::new(cfg.bootstrap.sectors),
             given_up: Vec::with_capacity(shm_types::MAX_OBJECTS),
             clusters_done: None,
+            objects_given_up: 0,
+            explored: false,
             score_frontiers: None,
             decision: None,
             blacklist: Vec::new(),
@@ -411,6 +486,8 @@ impl Session {
                 clusters_given_up: 0,
                 foreground: 0,
                 foreground_done: 0,
+                objects_given_up: 0,
+                explored: false,
                 finished_ns: None,
             },
             jobs: 0,
@@ -459,14 +536,10 @@ impl Session {
     }
 
     /// The start of every `job_done`: the job is back. A frontier round ends here: its goal is
-    /// issued, or, when no reachable frontier remains, the session ends with `no_frontier`.
+    /// issued (and blacklisted), or, when no reachable frontier remains, the room is marked
+    /// explored and [`Back::Explored`] returned (the planner decides whether the session ends).
     /// GBV and coverage rounds go back to the planner.
-    pub(crate) fn job_back(
-        &mut self,
-        output: JobOutput,
-        now_ns: u64,
-        no_frontier: PlannerStatus,
-    ) -> Back {
+    pub(crate) fn job_back(&mut self, output: JobOutput, now_ns: u64) -> Back {
         self.pending = false;
         match output {
             JobOutput::Frontier(r) => {
@@ -478,13 +551,23 @@ impl Session {
                     }
                     self.buffers.put_map(sc.map);
                 }
-                Back::Step(match r.goal {
+                match r.goal {
                     Some((pose, _)) => {
                         self.blacklist.push([pose[0], pose[1]]);
-                        Step::Goal(self.goals.issue(pose, 0.0, -1, goal_kind::FRONTIER, now_ns))
+                        self.explored = false;
+                        Back::Step(Step::Goal(self.goals.issue(
+                            pose,
+                            0.0,
+                            -1,
+                            goal_kind::FRONTIER,
+                            now_ns,
+                        )))
                     }
-                    None => self.finish(no_frontier, now_ns),
-                })
+                    None => {
+                        self.explored = true;
+                        Back::Explored
+                    }
+                }
             }
             JobOutput::Gbv(r) => Back::Gbv(r),
             JobOutput::Coverage(r) => Back::Coverage(r),
@@ -495,6 +578,7 @@ impl Session {
     pub(crate) fn discard(&mut self, back: Back) -> Step {
         match back {
             Back::Step(s) => return s,
+            Back::Explored => {}
             Back::Gbv(r) => {
                 self.buffers.put_map(r.map);
                 self.buffers.put_nav(r.nav);
@@ -537,6 +621,8 @@ impl Session {
             rounds: self.jobs,
             clusters_done: self.clusters_done.unwrap_or(self.summary.clusters_done),
             clusters_given_up: self.given_up.len() as u32,
+            objects_given_up: self.objects_given_up,
+            explored: self.explored,
             ..self.summary
         }
     }
@@ -545,8 +631,10 @@ impl Session {
 /// A job output back at its planner (see [`Session::job_back`]).
 #[derive(Debug)]
 pub(crate) enum Back {
-    /// What a frontier round led to: its goal, or the end of the session.
+    /// What a frontier round led to: its goal.
     Step(Step),
+    /// A frontier round found no reachable frontier: the room is explored.
+    Explored,
     /// A GBV round.
     Gbv(GbvResult),
     /// A coverage round.
@@ -637,15 +725,18 @@ mod tests {
             panic!("a frontier job");
         };
         assert!(matches!(s.begin(&map), Some(Step::Wait)), "job out");
-        // An empty exploration grid has no frontier: the session ends with the given status.
-        let back = s.job_back(job.run(), 7, PlannerStatus::Terminated);
-        let Back::Step(Step::Finished(sum)) = back else {
+        // An empty exploration grid has no frontier: the room counts as explored.
+        let back = s.job_back(job.run(), 7);
+        assert!(matches!(back, Back::Explored));
+        assert!(s.explored && !s.status().is_finished());
+        let Step::Finished(sum) = s.finish(PlannerStatus::Terminated, 7) else {
             panic!("finished");
         };
         assert_eq!(
-            (sum.status, sum.rounds, sum.finished_ns),
-            (PlannerStatus::Terminated, 1, Some(7))
+            (sum.status, sum.rounds, sum.finished_ns, sum.explored),
+            (PlannerStatus::Terminated, 1, Some(7), true)
         );
+        assert_eq!(sum.reason(), "explored (no reachable frontier)");
         assert!(matches!(s.begin(&map), Some(Step::Finished(_))));
         assert!(
             s.buffers.explore.is_some() && s.buffers.nav.is_some(),

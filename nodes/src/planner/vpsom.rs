@@ -1,37 +1,47 @@
 //! The VP-SOM planner (paper Algorithms 1 and 2): GBV rounds for the chassis, LBV for the neck,
-//! termination per section 3.4.
+//! termination per section 3.4, and exploration whenever no unfinished cluster is known.
 //!
 //! Modes:
 //! 1. **Look-around** (no cluster known yet, start of session): the neck sweeps 360° in place
 //!    through `bootstrap.look_around_steps` stops; no chassis goal.
-//! 2. **Explore** (still no cluster after a full sweep): frontier goals on the exploration grid
-//!    (kind FRONTIER), the neck keeps sweeping. As soon as a cluster appears, the frontier goal
-//!    is superseded by a GBV round. No cluster and no reachable frontier → `NoCandidates`.
-//! 3. **GBV**: for the first unfinished cluster by first sighting, a [`GbvJob`]; its best view is
-//!    published (kind GBV). When the base reports REACHED or UNREACHABLE for it, the next round
-//!    starts. Each round's goal is remembered for its cluster: later rounds drop candidates within
-//!    `gbv.revisit_radius` of it (a view already taken, or refused, is not chosen again), so every
-//!    round moves the base somewhere new. A cluster gets at most `gbv.max_rounds_per_cluster`
-//!    rounds (rounds in which it had no reachable candidate count too); then it is given up.
+//! 2. **Explore** (no open cluster: none known after the sweep, or every known one done or given
+//!    up): frontier goals on the exploration grid (kind FRONTIER), the neck sweeping. As soon as
+//!    an open cluster appears the frontier goal is superseded by a GBV round. When a frontier
+//!    round finds no reachable frontier the room is explored and the session ends.
+//! 3. **GBV**: for the first open cluster by first sighting, a [`GbvJob`]; its best view is
+//!    published (kind GBV). When the base reports REACHED or UNREACHABLE for it, the round ends:
+//!    the stall rule samples the cluster's unfinished objects ([`GiveUps`]) and the next round
+//!    starts. Each round's goal is remembered for its cluster: later rounds drop candidates
+//!    within `gbv.revisit_radius` of it, so every round moves the base somewhere new. A cluster
+//!    gets at most `gbv.max_rounds_per_cluster` rounds (rounds in which it had no reachable
+//!    candidate count too). A cluster that was approached at least once and then runs out of
+//!    rounds, or of new views, ends: its unfinished objects are given up. A cluster that never
+//!    had a reachable candidate is given up as unreachable. A GBV goal still being driven to when
+//!    no cluster is open any more is superseded by exploration.
 //!
-//! The LBV always tracks the cluster of the current GBV goal while it is unfinished, else the
-//! first unfinished cluster; with none, the camera stays on the last GBV goal's cluster, and
-//! before any GBV the neck looks around.
-//! Termination: every cluster done → `Terminated`; clusters remain but all are given up or
-//! none has a reachable candidate → `NoCandidates`.
+//! An open cluster is one that is not done, not ended, not unreachable, and has an unfinished
+//! foreground object not given up (or, without foreground objects, was not yet seen from enough
+//! sides). The LBV always tracks the cluster of the current GBV goal while it is open, else the
+//! first open cluster; with none, the neck sweeps while exploring, and otherwise stays on the
+//! last GBV goal's cluster (a 360° sweep on top of the base's turns loses localization).
+//! Termination: no open cluster and the room explored → `Terminated` (objects given up are
+//! listed in the summary and [`ViewPlanner::given_up_objects`]); `NoCandidates` if a cluster was
+//! unreachable or nothing was found at all.
 
 use crate::config::CameraConfig;
 use crate::geom::CameraMount;
-use crate::planner::clusters::{self, ClusterInfo};
+use crate::planner::clusters::{self, ClusterInfo, fg_done, members};
 use crate::planner::config::{PlannerConfig, PlannerKind};
 use crate::planner::evaluate::{EvalParams, Target};
 use crate::planner::gbv::{GbvJob, GbvParams};
+use crate::planner::giveup::{GiveUps, GivenUpObject, StallRule};
 use crate::planner::lbv::Lbv;
 use crate::planner::session::{
-    Back, JobOutput, LookAround, Outcome, PlannerInputs, PlannerJob, PlannerStatus, Session, Step,
-    Summary, ViewPlanner, neck_goal_for,
+    Back, ExploreSweep, JobOutput, LookAround, Outcome, PlannerInputs, PlannerJob, PlannerStatus,
+    Session, Step, Summary, ViewPlanner, neck_goal_for,
 };
 use crate::planner::terms::View;
+use glam::Vec3;
 use shm_types::{NeckGoal, ObjectMap, PlannerDecision, RobotState, goal_kind};
 
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
@@ -53,10 +63,17 @@ pub struct VpsomPlanner {
     last_cluster: i32,
     session: Session,
     look: LookAround,
+    sweep: ExploreSweep,
     mode: Mode,
     tracked: Option<i32>,
     rounds: Vec<(i32, u32)>,
     visited: Vec<(i32, [f32; 2])>,
+    /// Clusters approached and then out of rounds or views.
+    ended: Vec<i32>,
+    /// Clusters closed for the LBV (unreachable, ended, or every unfinished object given up);
+    /// refreshed by `next_goal`, read on the LBV path (fixed capacity).
+    closed: Vec<i32>,
+    give_ups: GiveUps,
 }
 
 impl VpsomPlanner {
@@ -64,6 +81,10 @@ impl VpsomPlanner {
     pub fn new(cfg: &PlannerConfig, camera: &CameraConfig) -> Self {
         let gbv = GbvParams::new(cfg, camera);
         let eval = gbv.eval;
+        let rule = StallRule {
+            rounds: cfg.give_up.rounds,
+            min_drop: cfg.give_up.min_drop,
+        };
         Self {
             cfg: cfg.clone(),
             eval,
@@ -77,10 +98,14 @@ impl VpsomPlanner {
                 cfg.bootstrap.look_around_steps,
                 cfg.bootstrap.neck_tolerance_deg.to_radians(),
             ),
+            sweep: ExploreSweep::new(cfg),
             mode: Mode::LookAround,
             tracked: None,
             rounds: Vec::with_capacity(shm_types::MAX_OBJECTS),
             visited: Vec::new(),
+            ended: Vec::with_capacity(shm_types::MAX_OBJECTS),
+            closed: Vec::with_capacity(shm_types::MAX_OBJECTS),
+            give_ups: GiveUps::new(rule, cfg.eps_sopm),
         }
     }
 
@@ -88,7 +113,25 @@ impl VpsomPlanner {
         self.cfg.bootstrap.empty_cluster_sectors
     }
 
-    fn count_round(&mut self, id: i32) {
+    fn approached(&self, id: i32) -> bool {
+        self.visited.iter().any(|(c, _)| *c == id)
+    }
+
+    /// Cluster `id` has no view left: it ends (its unfinished objects given up) if it was
+    /// approached before, else it is given up as unreachable.
+    fn no_view_left(&mut self, map: &ObjectMap, id: i32) {
+        if self.approached(id) {
+            if !self.ended.contains(&id) {
+                self.ended.push(id);
+            }
+            self.give_ups.cluster_ended(map, id);
+        } else if !self.session.given_up.contains(&id) {
+            self.session.given_up.push(id);
+        }
+        self.session.objects_given_up = self.give_ups.list().len() as u32;
+    }
+
+    fn count_round(&mut self, map: &ObjectMap, id: i32) {
         match self.rounds.iter_mut().find(|(c, _)| *c == id) {
             Some((_, n)) => *n += 1,
             None => self.rounds.push((id, 1)),
@@ -98,26 +141,67 @@ impl VpsomPlanner {
             .iter()
             .find(|(c, _)| *c == id)
             .map_or(0, |r| r.1);
-        let given_up = &mut self.session.given_up;
-        if n >= self.cfg.gbv.max_rounds_per_cluster && !given_up.contains(&id) {
-            given_up.push(id);
+        if n >= self.cfg.gbv.max_rounds_per_cluster {
+            self.no_view_left(map, id);
         }
+    }
+
+    /// Whether a cluster needs more views.
+    fn is_open(&self, map: &ObjectMap, c: &ClusterInfo) -> bool {
+        !self.session.given_up.contains(&c.id)
+            && !self.ended.contains(&c.id)
+            && !self.give_ups.settled(map, c)
+    }
+
+    /// The centroid of the cluster's unfinished objects not given up (its centre if none);
+    /// does not allocate.
+    fn open_centroid(&self, map: &ObjectMap, info: &ClusterInfo) -> Vec3 {
+        let eps = self.cfg.eps_sopm;
+        let (mut sum, mut n) = (Vec3::ZERO, 0u32);
+        for o in members(map, info.id) {
+            if !o.is_background() && !fg_done(o, eps) && !self.give_ups.contains(o.id) {
+                sum += Vec3::from(o.center);
+                n += 1;
+            }
+        }
+        if n == 0 { info.center } else { sum / n as f32 }
     }
 
     fn target(&self, map: &ObjectMap) -> Option<Target> {
         let eps = self.cfg.eps_sopm;
-        let (sides, given_up) = (&self.session.sides, &self.session.given_up);
+        let (sides, closed) = (&self.session.sides, &self.closed);
+        let open = |c: &ClusterInfo| {
+            !(c.done
+                || self.give_ups.settled(map, c)
+                || c.foreground == 0 && sides.sides(c.id) >= self.min_sides())
+        };
         let tracked = self
             .tracked
-            .filter(|id| !given_up.contains(id))
+            .filter(|id| !closed.contains(id))
             .and_then(|id| clusters::cluster_info(map, id, eps))
-            .filter(|c| !(c.done || c.foreground == 0 && sides.sides(c.id) >= self.min_sides()));
-        let info = tracked
-            .or_else(|| clusters::first_unfinished(map, eps, sides, self.min_sides(), given_up))?;
+            .filter(open);
+        let info = tracked.or_else(|| {
+            clusters::first_unfinished(map, eps, sides, self.min_sides(), closed)
+                .filter(|c| !self.give_ups.settled(map, c))
+        })?;
         Some(Target {
             cluster_id: info.id,
-            centroid: clusters::unfinished_centroid(map, &info, eps),
+            centroid: self.open_centroid(map, &info),
         })
+    }
+
+    fn finish(&mut self, map: &ObjectMap, all: &[ClusterInfo], now_ns: u64) -> Step {
+        // Objects that appeared in an ended cluster after it ended are given up with it.
+        for id in self.ended.clone() {
+            self.give_ups.cluster_ended(map, id);
+        }
+        self.session.objects_given_up = self.give_ups.list().len() as u32;
+        let status = if all.is_empty() || !self.session.given_up.is_empty() {
+            PlannerStatus::NoCandidates
+        } else {
+            PlannerStatus::Terminated
+        };
+        self.session.finish(status, now_ns)
     }
 }
 
@@ -130,68 +214,88 @@ impl ViewPlanner for VpsomPlanner {
         if let Some(step) = self.session.begin(inputs.map) {
             return step;
         }
+        let map = inputs.map;
         let eps = self.cfg.eps_sopm;
+        let current = self.session.goals.current;
+        let outcome = self.session.goals.poll(inputs.state);
+        if let Some(g) = current
+            && g.kind == goal_kind::GBV
+            && matches!(outcome, Outcome::Reached | Outcome::Unreachable)
+        {
+            self.give_ups.round_ended(map, g.cluster_id);
+            self.session.objects_given_up = self.give_ups.list().len() as u32;
+        }
         let all: Vec<ClusterInfo> =
-            clusters::clusters(inputs.map, eps, &self.session.sides, self.min_sides());
-        if self.session.goals.poll(inputs.state) == Outcome::Pending {
-            // A frontier goal is superseded as soon as a cluster is known.
-            if self.mode != Mode::Explore || all.is_empty() {
+            clusters::clusters(map, eps, &self.session.sides, self.min_sides());
+        let open: Vec<ClusterInfo> = all
+            .iter()
+            .filter(|c| self.is_open(map, c))
+            .copied()
+            .collect();
+        let mut closed = std::mem::take(&mut self.closed);
+        closed.clear();
+        closed.extend(all.iter().filter(|c| !self.is_open(map, c)).map(|c| c.id));
+        self.closed = closed;
+        if outcome == Outcome::Pending {
+            // A frontier goal is kept while no cluster is open, a GBV goal while one is; else
+            // it is superseded.
+            let frontier = current.is_some_and(|g| g.kind == goal_kind::FRONTIER);
+            if frontier == open.is_empty() {
                 return Step::Wait;
             }
         }
-        if all.is_empty() {
-            if !self.look.swept() {
-                self.mode = Mode::LookAround;
-                return Step::Wait;
-            }
+        if !open.is_empty() {
+            self.mode = Mode::Gbv;
+            let mut snapshot = self.session.buffers.map(map);
+            self.give_ups.mark_complete(&mut snapshot);
+            let job = GbvJob {
+                map: snapshot,
+                nav: self.session.buffers.nav(inputs.nav),
+                base: inputs.state.base_pose,
+                clusters: open,
+                visited: self.visited.clone(),
+                params: self.gbv,
+            };
+            return self.session.compute(PlannerJob::Gbv(job));
+        }
+        if all.is_empty() && !self.look.swept() {
+            self.mode = Mode::LookAround;
+            return Step::Wait;
+        }
+        if !self.session.explored {
             self.mode = Mode::Explore;
             return self.session.frontier_job(inputs);
         }
-        let open: Vec<ClusterInfo> = all
-            .iter()
-            .filter(|c| !c.done && !self.session.given_up.contains(&c.id))
-            .copied()
-            .collect();
-        if open.is_empty() {
-            let status = if all.iter().all(|c| c.done) {
-                PlannerStatus::Terminated
-            } else {
-                PlannerStatus::NoCandidates
-            };
-            return self.session.finish(status, now_ns);
-        }
-        self.mode = Mode::Gbv;
-        let job = GbvJob {
-            map: self.session.buffers.map(inputs.map),
-            nav: self.session.buffers.nav(inputs.nav),
-            base: inputs.state.base_pose,
-            clusters: open,
-            visited: self.visited.clone(),
-            params: self.gbv,
-        };
-        self.session.compute(PlannerJob::Gbv(job))
+        self.finish(map, &all, now_ns)
     }
 
     fn job_done(&mut self, output: JobOutput, now_ns: u64) -> Step {
-        let r = match self
-            .session
-            .job_back(output, now_ns, PlannerStatus::NoCandidates)
-        {
+        let r = match self.session.job_back(output, now_ns) {
             Back::Gbv(r) => r,
             other => return self.session.discard(other),
         };
+        self.session.decision = Some(r.decision);
+        let Some(b) = r.best else {
+            // No open cluster has a view left: each ends or is given up; exploration (or the
+            // end) follows on the next call.
+            for id in &r.unreachable {
+                self.no_view_left(&r.map, *id);
+            }
+            self.session.buffers.put_map(r.map);
+            self.session.buffers.put_nav(r.nav);
+            return Step::Wait;
+        };
+        for id in &r.unreachable {
+            self.count_round(&r.map, *id);
+        }
+        self.give_ups.start(&r.map, b.cluster_id);
+        self.count_round(&r.map, b.cluster_id);
         self.session.buffers.put_map(r.map);
         self.session.buffers.put_nav(r.nav);
-        self.session.decision = Some(r.decision);
-        for id in &r.unreachable {
-            self.count_round(*id);
-        }
-        let Some(b) = r.best else {
-            return self.session.finish(PlannerStatus::NoCandidates, now_ns);
-        };
-        self.count_round(b.cluster_id);
         self.tracked = Some(b.cluster_id);
         self.visited.push((b.cluster_id, [b.pose[0], b.pose[1]]));
+        // The base goes somewhere new: the room is looked at again once no cluster is open.
+        self.session.explored = false;
         Step::Goal(
             self.session
                 .goals
@@ -199,7 +303,7 @@ impl ViewPlanner for VpsomPlanner {
         )
     }
 
-    fn neck_goal(&mut self, map: &ObjectMap, state: &RobotState, _now_ns: u64) -> NeckGoal {
+    fn neck_goal(&mut self, map: &ObjectMap, state: &RobotState, now_ns: u64) -> NeckGoal {
         let pose = self
             .mount
             .camera_pose(state.base_pose, state.neck_yaw, state.neck_pitch);
@@ -222,15 +326,17 @@ impl ViewPlanner for VpsomPlanner {
             }
             None => {
                 self.last_lbv = None;
-                // Every known cluster done while the last GBV goal is still being driven to:
-                // keep the camera on that goal's cluster. A 360° sweep on top of the base's
-                // turns exceeds the tracking rate and loses localization.
+                // Exploring: the slow sweep about the heading. Otherwise (every known cluster
+                // done while the last GBV goal is still being driven to) keep the camera on that
+                // goal's cluster: a full-rate 360° sweep on top of the base's turns exceeds the
+                // tracking rate and loses localization. Before anything is known: look around.
                 let held = self
                     .tracked
                     .and_then(|id| clusters::cluster_info(map, id, self.cfg.eps_sopm));
-                goal.yaw = match held {
-                    Some(c) => self.mount.neck_yaw_toward(state.base_pose, c.center),
-                    None => self.look.target(state.neck_yaw),
+                goal.yaw = match (self.mode, held) {
+                    (Mode::Explore, _) => self.sweep.yaw(now_ns),
+                    (_, Some(c)) => self.mount.neck_yaw_toward(state.base_pose, c.center),
+                    (_, None) => self.look.target(state.neck_yaw),
                 };
             }
         }
@@ -245,6 +351,10 @@ impl ViewPlanner for VpsomPlanner {
         self.session.summary()
     }
 
+    fn given_up_objects(&self) -> Vec<GivenUpObject> {
+        self.give_ups.list().to_vec()
+    }
+
     fn take_decision(&mut self) -> Option<Box<PlannerDecision>> {
         self.session.take_decision()
     }
@@ -257,5 +367,187 @@ impl ViewPlanner for VpsomPlanner {
         d.cluster_id = self.last_cluster;
         d.state = self.session.status().code();
         true
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::planner::synth::add_object;
+    use shm_types::{OccupancyGrid, boxed_zeroed, grid_cell, nav_status};
+
+    fn planner() -> VpsomPlanner {
+        VpsomPlanner::new(&PlannerConfig::default(), &CameraConfig::default())
+    }
+
+    /// A desk (cluster 1) at (2, 0) with a cup seen from `from` (complete if `done`).
+    fn desk_map(from: &[[f32; 2]], done: bool) -> Box<ObjectMap> {
+        let mut m = boxed_zeroed::<ObjectMap>();
+        m.eps_sopm = 0.42;
+        let all = [[4.0, 0.0], [2.0, 2.0], [0.0, 0.0], [2.0, -2.0]];
+        add_object(
+            &mut m,
+            1,
+            60,
+            true,
+            1,
+            [2.0, 0.0, 0.36],
+            [1.0, 0.8, 0.72],
+            &all,
+            1,
+        );
+        add_object(
+            &mut m,
+            2,
+            41,
+            false,
+            1,
+            [2.0, 0.1, 0.78],
+            [0.09, 0.09, 0.11],
+            from,
+            2,
+        );
+        m.objects[1].complete = done as u8;
+        m
+    }
+
+    /// 4 m × 4 m at 0.1 m: the left `known` columns free, the rest unknown.
+    fn grid(known: usize) -> Box<OccupancyGrid> {
+        let mut g = boxed_zeroed::<OccupancyGrid>();
+        (g.resolution, g.width, g.height) = (0.1, 40, 40);
+        g.origin = [-1.0, -2.0];
+        for i in 0..1600 {
+            g.cells[i] = if i % 40 < known {
+                grid_cell::FREE
+            } else {
+                grid_cell::UNKNOWN
+            };
+        }
+        g
+    }
+
+    fn inputs<'a>(
+        map: &'a ObjectMap,
+        state: &'a RobotState,
+        nav: &'a OccupancyGrid,
+        explore: &'a OccupancyGrid,
+    ) -> PlannerInputs<'a> {
+        PlannerInputs {
+            map,
+            state,
+            nav,
+            explore,
+        }
+    }
+
+    /// Run jobs inline until the planner returns something else.
+    fn settle(p: &mut VpsomPlanner, step: Step) -> Step {
+        let mut step = step;
+        while let Step::Compute(job) = step {
+            step = p.job_done(job.run(), 0);
+        }
+        step
+    }
+
+    #[test]
+    fn a_done_room_is_explored_before_it_terminates() {
+        let mut p = planner();
+        let map = desk_map(&[[4.0, 0.0], [2.0, 2.0], [0.0, 0.0], [2.0, -2.0]], true);
+        assert!(map.objects[1].is_complete());
+        let (state, empty) = (RobotState::default(), boxed_zeroed::<OccupancyGrid>());
+        let mut explore = grid(20);
+        // Every cluster done but unknown space left: a frontier goal, not the end.
+        let step = p.next_goal(&inputs(&map, &state, &empty, &explore), 0);
+        let Step::Compute(PlannerJob::Frontier(_)) = step else {
+            panic!("explore first: {step:?}");
+        };
+        let Step::Goal(g) = settle(&mut p, step) else {
+            panic!("a frontier goal");
+        };
+        assert_eq!(g.kind, goal_kind::FRONTIER);
+        assert!(!p.status().is_finished());
+        // The frontier goal is kept while it is driven to.
+        let step = p.next_goal(&inputs(&map, &state, &empty, &explore), 1);
+        assert!(matches!(step, Step::Wait), "{step:?}");
+        // Reached, and nothing unknown is left: explored, then terminated.
+        let reached = RobotState {
+            nav_goal_id: g.goal_id,
+            nav_status: nav_status::REACHED,
+            ..Default::default()
+        };
+        explore = grid(40);
+        let step = p.next_goal(&inputs(&map, &reached, &empty, &explore), 2);
+        assert!(matches!(settle(&mut p, step), Step::Wait));
+        let Step::Finished(s) = p.next_goal(&inputs(&map, &reached, &empty, &explore), 3) else {
+            panic!("finished");
+        };
+        assert_eq!((s.status, s.explored), (PlannerStatus::Terminated, true));
+        assert_eq!(s.reason(), "complete and explored");
+    }
+
+    #[test]
+    fn an_open_cluster_supersedes_a_frontier_goal() {
+        let mut p = planner();
+        let done = desk_map(&[[4.0, 0.0], [2.0, 2.0], [0.0, 0.0], [2.0, -2.0]], true);
+        let (state, empty, explore) = (
+            RobotState::default(),
+            boxed_zeroed::<OccupancyGrid>(),
+            grid(20),
+        );
+        let step = p.next_goal(&inputs(&done, &state, &empty, &explore), 0);
+        let Step::Goal(g) = settle(&mut p, step) else {
+            panic!("a frontier goal");
+        };
+        assert_eq!(g.kind, goal_kind::FRONTIER);
+        // While it is driven to, a cup seen from one side appears: a GBV round at once.
+        let open = desk_map(&[[0.0, 0.0]], false);
+        let step = p.next_goal(&inputs(&open, &state, &empty, &explore), 1);
+        assert!(
+            matches!(step, Step::Compute(PlannerJob::Gbv(_))),
+            "{step:?}"
+        );
+        let Step::Goal(g) = settle(&mut p, step) else {
+            panic!("a GBV goal");
+        };
+        assert_eq!((g.kind, g.cluster_id), (goal_kind::GBV, 1));
+        // The GBV goal is kept while the cluster is open.
+        let step = p.next_goal(&inputs(&open, &state, &empty, &explore), 2);
+        assert!(matches!(step, Step::Wait));
+    }
+
+    #[test]
+    fn a_stalled_object_is_given_up_and_the_session_terminates() {
+        let mut p = planner();
+        let mut map = desk_map(&[[0.0, 0.0]], false);
+        let h = map.objects[1].h_sopm;
+        assert!(h > 0.42, "{h}");
+        let empty = boxed_zeroed::<OccupancyGrid>();
+        let mut state = RobotState::default();
+        let mut gbv_goals = 0;
+        let summary = loop {
+            let step = p.next_goal(&inputs(&map, &state, &empty, &empty), 0);
+            match settle(&mut p, step) {
+                Step::Goal(g) => {
+                    assert_eq!(g.kind, goal_kind::GBV, "no frontier in an empty grid");
+                    gbv_goals += 1;
+                    // Reached; the cup was observed again, and its entropy did not fall.
+                    state.nav_goal_id = g.goal_id;
+                    state.nav_status = nav_status::REACHED;
+                    map.objects[1].observations += 10;
+                }
+                Step::Wait => {}
+                Step::Finished(s) => break s,
+                Step::Compute(_) => unreachable!(),
+            }
+            assert!(gbv_goals < 12, "given up before the round limit");
+        };
+        // Three rounds that saw it without a fall of 0.02: given up; then explored and done.
+        assert_eq!(gbv_goals, 3);
+        assert_eq!(summary.status, PlannerStatus::Terminated, "{summary}");
+        assert_eq!((summary.objects_given_up, summary.explored), (1, true));
+        assert!(summary.reason().starts_with("objects given up: 1"));
+        let g = &p.given_up_objects()[0];
+        assert_eq!((g.map_id, g.label, g.cluster_id), (2, "cup", 1));
+        assert!((g.h_sopm - h).abs() < 1e-6);
     }
 }

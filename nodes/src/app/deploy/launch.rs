@@ -91,6 +91,9 @@ pub fn run(args: &RunArgs, cfg: &Config, exe: &Path) -> anyhow::Result<RunOutcom
     let scene = Scene::builtin_or_load(&args.scene)?;
     std::fs::create_dir_all(&args.out)
         .with_context(|| format!("creating output directory {}", args.out.display()))?;
+    let outcome_file = args.out.join(super::planner::OUTCOME_FILE);
+    // A file left by an earlier run in the same directory must not be read as this run's.
+    let _ = std::fs::remove_file(&outcome_file);
     let mut launcher = Launcher::new(
         &format!("launcher-{}", args.namespace),
         &runtime::ports::iceoryx2_config(),
@@ -167,7 +170,7 @@ pub fn run(args: &RunArgs, cfg: &Config, exe: &Path) -> anyhow::Result<RunOutcom
         }
         if let Some(s) = final_state {
             break if s == planner_state::TERMINATED {
-                "planner terminated: every cluster complete".into()
+                "planner terminated".into()
             } else {
                 "planner stopped: no reachable candidate".into()
             };
@@ -219,7 +222,18 @@ pub fn run(args: &RunArgs, cfg: &Config, exe: &Path) -> anyhow::Result<RunOutcom
     }
     log.add_deadline_misses(misses);
     let terminated = final_state == Some(planner_state::TERMINATED);
+    // The planner's own account of its end (reason, explored, objects given up), if it left one.
+    let outcome = std::fs::read(&outcome_file)
+        .ok()
+        .and_then(|b| serde_json::from_slice::<super::planner::PlannerOutcome>(&b).ok());
+    let reason = match &outcome {
+        Some(o) if final_state.is_some() && !failed => format!("planner: {}", o.reason),
+        _ => reason,
+    };
     log.finish(sim_ns, terminated, &reason);
+    if let Some(o) = outcome {
+        log.planner_outcome(o.explored, o.objects_given_up);
+    }
     let run = RunInfo {
         scene: scene.name.clone(),
         planner: args.planner.clone(),

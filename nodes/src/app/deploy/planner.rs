@@ -27,6 +27,7 @@ pub fn planner_node(args: &RunArgs, cfg: &Config) -> Result<(), HostError> {
     let stop = host::stop_on_signals()?;
     let (events_tx, events_rx) = crossbeam::channel::bounded::<DeadlineEvent>(1024);
     let (cfg2, ns, gbv_load) = (cfg.clone(), args.namespace.clone(), args.gbv_load);
+    let outcome_file = args.out.join(OUTCOME_FILE);
     let period = host::wall_period(cfg.planner.lbv_hz, args.time_scale);
     // The budget is execution time on this machine: wall milliseconds, whatever the time scale.
     let budget_fraction = (cfg.planner.lbv_budget_ms * 1e-3 / period.as_secs_f64()).min(1.0);
@@ -37,7 +38,7 @@ pub fn planner_node(args: &RunArgs, cfg: &Config) -> Result<(), HostError> {
         events: Some(events_tx),
     });
     let ended = host::drive("planner", &stop, pace, move || {
-        PlannerHost::new(&cfg2, &ns, gbv_load, events_rx)
+        PlannerHost::new(&cfg2, &ns, gbv_load, events_rx, outcome_file)
     })?;
     if !ended.finished && !ended.interrupted {
         return Err(HostError::EndedEarly);
@@ -132,6 +133,24 @@ fn load_poses(map: &ObjectMap, n: usize, safe_distance: f32) -> Vec<[f32; 3]> {
         .collect()
 }
 
+/// The file (in the run's output directory) where the planner node leaves its [`PlannerOutcome`]
+/// for the launcher.
+pub const OUTCOME_FILE: &str = "planner-outcome.json";
+
+/// How the planner ended, as the planner node reports it to the launcher (the same fields the
+/// lockstep host puts into `metrics.json`).
+#[derive(Debug, Clone, serde::Serialize, serde::Deserialize)]
+pub struct PlannerOutcome {
+    /// Whether the planner's end condition holds (`Terminated`).
+    pub terminated: bool,
+    /// [`planner::Summary::reason`].
+    pub reason: String,
+    /// Whether the room was explored.
+    pub explored: bool,
+    /// Objects given up.
+    pub objects_given_up: Vec<crate::eval::GivenUpEntry>,
+}
+
 /// How long the planner waits for its inputs' publishers before its first cycle.
 const INPUT_WAIT: Duration = Duration::from_secs(10);
 
@@ -163,6 +182,7 @@ struct PlannerHost {
     decision_pub: Publisher<PlannerDecision>,
     deadline_pub: Publisher<DeadlineEvent>,
     events: crossbeam::channel::Receiver<DeadlineEvent>,
+    outcome_file: std::path::PathBuf,
     _ctx: PortContext,
 }
 
@@ -172,6 +192,7 @@ impl PlannerHost {
         ns: &str,
         gbv_load: usize,
         events: crossbeam::channel::Receiver<DeadlineEvent>,
+        outcome_file: std::path::PathBuf,
     ) -> Result<Self, HostError> {
         let ctx = PortContext::with_namespace(&cfg.ports, "planner", ns)?;
         Ok(Self {
@@ -198,6 +219,7 @@ impl PlannerHost {
             decision_pub: ctx.publisher(topics::DECISION)?,
             deadline_pub: ctx.publisher(topics::DEADLINE)?,
             events,
+            outcome_file,
             _ctx: ctx,
         })
     }
@@ -359,11 +381,31 @@ impl PlannerHost {
                         l.jobs, l.candidates
                     );
                 }
+                self.write_outcome(&summary);
                 self.publish_gbv_decision(t, Some(summary.status.code()))?;
                 return Ok(false);
             }
         }
         Ok(true)
+    }
+
+    /// Leave the outcome for the launcher (a failure to write is reported, not fatal: the
+    /// launcher then falls back to the final state code).
+    fn write_outcome(&self, summary: &planner::Summary) {
+        let outcome = PlannerOutcome {
+            terminated: summary.status == planner::PlannerStatus::Terminated,
+            reason: summary.reason(),
+            explored: summary.explored,
+            objects_given_up: crate::app::lockstep::given_up_entries(
+                &self.planner.given_up_objects(),
+            ),
+        };
+        let written = serde_json::to_vec_pretty(&outcome)
+            .map_err(std::io::Error::other)
+            .and_then(|b| std::fs::write(&self.outcome_file, b));
+        if let Err(e) = written {
+            eprintln!("planner: writing {}: {e}", self.outcome_file.display());
+        }
     }
 
     fn publish_gbv_decision(&mut self, t: u64, final_state: Option<u8>) -> Result<(), HostError> {
