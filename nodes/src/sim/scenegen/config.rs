@@ -31,6 +31,9 @@ pub struct SceneGenConfig {
     pub start_clearance_m: f32,
     /// Probability that the start faces the first cluster (else a random direction).
     pub start_faces_cluster: f32,
+    /// Localization features the start view must see (the sim's visual-SLAM model tracks
+    /// nothing below `sim.min_tracked_features`).
+    pub start_min_features: u32,
     /// Viewing poses for the visibility check lie this far from an object at least, metres.
     pub view_min_m: f32,
     /// ... and at most, metres.
@@ -97,6 +100,12 @@ impl SceneGenConfig {
             self.start_faces_cluster.into(),
             0.0,
             1.0,
+        )?;
+        c.count(
+            "scenegen.start_min_features",
+            self.start_min_features as usize,
+            0,
+            100_000,
         )?;
         c.in_range("scenegen.view_min_m", self.view_min_m.into(), 0.3, 5.0)?;
         c.require(

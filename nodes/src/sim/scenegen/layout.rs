@@ -345,7 +345,7 @@ fn place_chair(rng: &mut Pcg64, d: &mut Draft, s: usize, number: usize) -> bool 
 
 /// A free start pose with `start_clearance_m` around the robot, facing the first cluster or
 /// a random direction.
-fn draw_start(
+pub(crate) fn draw_start(
     rng: &mut Pcg64,
     d: &Draft,
     cfg: &SceneGenConfig,

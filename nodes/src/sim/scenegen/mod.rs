@@ -15,7 +15,9 @@
 //! clusters (desks, tables, counters, shelves 0.9–1.05 m high, coffee tables, couches; chairs at
 //! desks and tables, sometimes carrying an object) placed against the walls or free-standing
 //! with a `passage_m` gap, a start pose with `start_clearance_m` of free space around the robot
-//! (facing the first cluster with probability `start_faces_cluster`, else any direction), and
+//! (facing the first cluster with probability `start_faces_cluster`, else any direction, and
+//! seeing at least `start_min_features` of the simulated visual SLAM's features, so that
+//! tracking starts: [`start_features`]), and
 //! 5–25 foreground objects of classes with a mapper size prior, sizes from a catalogue, each
 //! resting on a support top (z from the top), 15 mm apart at least, with plausible materials.
 //!
@@ -104,6 +106,20 @@ pub enum GenError {
     Invalid(#[from] SceneError),
 }
 
+/// Localization features the simulator's visual-SLAM model tracks in the first frame at the
+/// start (160 × 120 render of the configured camera, neck straight ahead).
+pub fn start_features(scene: &Scene, cfg: &Config) -> u32 {
+    let mut small = cfg.clone();
+    (small.camera.width, small.camera.height) = (160, 120);
+    let Ok(mut sim) = crate::sim::Sim::new(scene.clone(), &small, 0) else {
+        return 0;
+    };
+    let mut frame = shm_types::boxed_zeroed::<shm_types::DepthFrame>();
+    let mut dets = shm_types::boxed_zeroed::<shm_types::Detections>();
+    sim.render(&mut frame, &mut dets, 0);
+    sim.localization().last_tracked()
+}
+
 /// The scene name of a seed and kind: `gen-<kind>-<seed>`.
 pub fn scene_name(seed: u64, kind: Kind) -> String {
     format!("gen-{}-{seed}", kind.name())
@@ -122,8 +138,24 @@ pub fn generate(seed: u64, kind: Option<Kind>, cfg: &Config) -> Result<Generated
             continue;
         };
         let file = Path::new(&name);
-        let text = write::scene_toml(&draft, &name, kind, seed);
-        let scene = Scene::parse(file, &text)?;
+        // The start must give visual SLAM enough features to track (a start facing a bare wall
+        // leaves the mapper without a frame): redraw the start pose until it does.
+        let mut scene = Scene::parse(file, &write::scene_toml(&draft, &name, kind, seed))?;
+        let mut tries = 0;
+        while start_features(&scene, cfg) < g.start_min_features {
+            tries += 1;
+            let Some(start) = (tries <= 20)
+                .then(|| layout::draw_start(&mut rng, &draft, g, cfg.robot.radius))
+                .flatten()
+            else {
+                break;
+            };
+            draft.start = start;
+            scene = Scene::parse(file, &write::scene_toml(&draft, &name, kind, seed))?;
+        }
+        if start_features(&scene, cfg) < g.start_min_features {
+            continue;
+        }
         let vis = visibility::check(&scene, cfg);
         // Drop what no reachable pose sees (objects and draft entries are in the same order).
         let keep: Vec<bool> = vis.visible.clone();
