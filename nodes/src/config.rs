@@ -44,6 +44,8 @@ pub struct Config {
     pub bench: BenchConfig,
     /// `vpsom sensing` (sensing report) settings.
     pub sensing: SensingConfig,
+    /// Scene generator (`vpsom scene gen`, `vpsom bench --generated`).
+    pub scenegen: crate::sim::scenegen::SceneGenConfig,
     /// MCAP recorder.
     pub recorder: runtime::recorder::RecorderConfig,
 }
@@ -415,6 +417,7 @@ impl Config {
         self.run.validate(&c)?;
         self.bench.validate(&c)?;
         self.sensing.validate(&c)?;
+        self.scenegen.validate(&c)?;
         self.recorder.validate(&c)
     }
 }

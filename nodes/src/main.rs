@@ -4,7 +4,7 @@ use anyhow::Context;
 use clap::{Args, Parser, Subcommand};
 use nodes::app::{bench, deploy, lockstep, sensing};
 use nodes::config::Config;
-use nodes::sim::{BUILTIN_SCENES, Scene};
+use nodes::sim::{BUILTIN_SCENES, Scene, scenegen};
 use std::path::{Path, PathBuf};
 use std::process::ExitCode;
 
@@ -30,6 +30,9 @@ enum Command {
     /// Measure the simulated sensing on a scripted tour: detector recall, false positives, box
     /// IoU, confusion, invalid depth, pose ATE/RPE; prints a table, writes sensing.json.
     Sensing(SensingCmd),
+    /// Scene files: generate random rooms (`vpsom scene gen --seed N --out FILE`).
+    #[command(subcommand)]
+    Scene(SceneCmd),
     /// Re-render tables and plots from saved metrics.json files.
     Report {
         /// Run directories or trees containing metrics.json files.
@@ -127,6 +130,31 @@ struct BenchCmd {
     /// Add VP-SOM with each F(v) term disabled.
     #[arg(long)]
     ablation: bool,
+    /// Add K generated rooms (`vpsom scene gen` seeds 1..=K, kind from the seed) to the scenes;
+    /// their scene files are saved under DIR/scenes/.
+    #[arg(long, value_name = "K", default_value_t = 0)]
+    generated: u64,
+    /// With --generated: run only the generated rooms (not the paper scenes).
+    #[arg(long, requires = "generated")]
+    generated_only: bool,
+}
+
+#[derive(Debug, Subcommand)]
+enum SceneCmd {
+    /// Generate a random room (office, kitchen, living room or lab) as a scene file: 4-9 m
+    /// sides, maybe a partition, 1-4 support clusters, 5-25 objects each visible from a
+    /// reachable pose. Same seed, kind and config → the same file.
+    Gen {
+        /// Seed of the room.
+        #[arg(long)]
+        seed: u64,
+        /// office | kitchen | living | lab (default: from the seed).
+        #[arg(long)]
+        kind: Option<String>,
+        /// Scene file to write.
+        #[arg(long)]
+        out: PathBuf,
+    },
 }
 
 #[derive(Debug, Args)]
@@ -183,6 +211,7 @@ fn main() -> ExitCode {
         Command::Run(cmd) => run(config, cmd),
         Command::Bench(cmd) => bench_cmd(config, cmd),
         Command::Sensing(cmd) => sensing_cmd(config, cmd),
+        Command::Scene(cmd) => scene_cmd(config, cmd),
         Command::Report { dirs, out } => report(&dirs, out),
         Command::Trace(cmd) => trace(cmd),
         Command::Doctor => doctor(config),
@@ -327,11 +356,28 @@ fn print_metrics(m: &nodes::eval::Metrics) {
 fn bench_cmd(config: Option<PathBuf>, cmd: BenchCmd) -> anyhow::Result<ExitCode> {
     let base = load_config(config.as_deref())?;
     let b = base.bench;
-    let scenes = if cmd.scenes.is_empty() {
+    let names: Vec<String> = if cmd.generated_only {
+        cmd.scenes
+    } else if cmd.scenes.is_empty() {
         BUILTIN_SCENES.iter().map(|(n, _)| n.to_string()).collect()
     } else {
         cmd.scenes
     };
+    let mut scenes: Vec<Scene> = names
+        .iter()
+        .map(|s| load_scene(s))
+        .collect::<anyhow::Result<_>>()?;
+    if cmd.generated > 0 {
+        let dir = cmd.out.join("scenes");
+        std::fs::create_dir_all(&dir).with_context(|| format!("creating {}", dir.display()))?;
+        for seed in 1..=cmd.generated {
+            let g = scenegen::generate(seed, None, &base)?;
+            let file = dir.join(format!("{}.toml", g.scene.name));
+            std::fs::write(&file, &g.toml)
+                .with_context(|| format!("writing {}", file.display()))?;
+            scenes.push(g.scene);
+        }
+    }
     let mut planners = if cmd.planners.is_empty() {
         vec!["vpsom".into(), "coverage".into(), "frontier".into()]
     } else {
@@ -351,10 +397,7 @@ fn bench_cmd(config: Option<PathBuf>, cmd: BenchCmd) -> anyhow::Result<ExitCode>
         jobs
     };
     let spec = bench::BenchSpec {
-        scenes: scenes
-            .iter()
-            .map(|s| load_scene(s))
-            .collect::<anyhow::Result<_>>()?,
+        scenes,
         planners,
         seeds: cmd.seeds.unwrap_or(b.seeds),
         jobs,
@@ -433,6 +476,42 @@ fn sensing_cmd(config: Option<PathBuf>, cmd: SensingCmd) -> anyhow::Result<ExitC
     let path = report.write(&cmd.out)?;
     print!("{}", report.table());
     println!("report: {}", path.display());
+    Ok(ExitCode::SUCCESS)
+}
+
+fn scene_cmd(config: Option<PathBuf>, cmd: SceneCmd) -> anyhow::Result<ExitCode> {
+    let cfg = load_config(config.as_deref())?;
+    match cmd {
+        SceneCmd::Gen { seed, kind, out } => {
+            let kind = match kind.as_deref() {
+                None => None,
+                Some(k) => Some(scenegen::Kind::from_name(k).with_context(|| {
+                    format!("--kind {k:?}: must be office, kitchen, living or lab")
+                })?),
+            };
+            let start = std::time::Instant::now();
+            let g = scenegen::generate(seed, kind, &cfg)?;
+            std::fs::write(&out, &g.toml).with_context(|| format!("writing {}", out.display()))?;
+            let s = &g.stats;
+            eprintln!(
+                "{}: {:.2} x {:.2} m, {} partition(s), {} cluster(s) ({} out of the start view), \
+                 {} background and {} foreground objects ({} partly occluded), {} attempt(s), \
+                 {:.0} ms",
+                g.scene.name,
+                s.room[0],
+                s.room[1],
+                s.partitions,
+                s.clusters,
+                s.out_of_start_view,
+                s.background,
+                s.objects,
+                s.occluded,
+                s.attempts,
+                start.elapsed().as_secs_f64() * 1e3
+            );
+            println!("{}", out.display());
+        }
+    }
     Ok(ExitCode::SUCCESS)
 }
 

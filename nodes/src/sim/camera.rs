@@ -219,7 +219,7 @@ impl DepthCamera {
                         inst: &mut inst_row[x0..x1],
                         cos: &mut cos_row[x0..x1],
                     };
-                    let id = (obj + 1) as u8;
+                    let id = world.instance(obj);
                     match world.object_shape(obj) {
                         SolidShape::Cuboid(c) => {
                             rowcast::cuboid(hits, &rays, y, c.half_extents, far, id)

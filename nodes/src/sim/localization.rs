@@ -143,6 +143,17 @@ impl Localization {
             Vec3::NEG_Y,
             dw,
         );
+        // Partition walls carry wall texture on their four sides.
+        for p in &scene.partitions {
+            let rot = Mat3::from_rotation_z(p.yaw);
+            let (x, y) = (rot * Vec3::X, rot * Vec3::Y);
+            let (h, mid) = (p.size * 0.5, p.center.extend(r.height * 0.5));
+            for (n, t, ht, hn) in [(x, y, h.y, h.x), (y, x, h.x, h.y)] {
+                for s in [1.0, -1.0] {
+                    face(&mut rng, mid + n * (s * hn), t * ht, vz, n * s, dw);
+                }
+            }
+        }
         points.extend(side_points);
         normals.extend(side_normals);
         let words = points.len().div_ceil(64);

@@ -35,9 +35,11 @@ mod config;
 mod detector;
 mod localization;
 mod nav;
+mod partition;
 mod robot;
 mod rowcast;
 mod scene;
+pub mod scenegen;
 mod slam;
 mod visibility;
 mod world;
@@ -48,6 +50,7 @@ pub use config::{DetectorConfig, RobotConfig, SimConfig, SlamConfig};
 pub use detector::Detector;
 pub use localization::Localization;
 pub use nav::{GridTooLarge, NavGrid, NavRefusal};
+pub use partition::Partition;
 pub use robot::Robot;
 pub use scene::{
     BUILTIN_SCENES, Material, OVERLAP_TOLERANCE, Room, SUPPORT_TOLERANCE, Scene, SceneError,

@@ -76,7 +76,7 @@ pub struct NavGrid {
 
 impl NavGrid {
     /// Grid over the scene's room: a cell is occupied if its centre is within `inflation` of an
-    /// object's footprint or of a wall.
+    /// object's footprint, of a partition wall or of a room wall.
     pub fn build(scene: &Scene, inflation: f32, resolution: f32) -> Result<NavGrid, GridTooLarge> {
         let r = scene.room;
         let width = ((r.max.x - r.min.x) / resolution).ceil() as usize;
@@ -96,7 +96,11 @@ impl NavGrid {
                     || scene
                         .objects
                         .iter()
-                        .any(|o| o.footprint_distance(p) <= inflation);
+                        .any(|o| o.footprint_distance(p) <= inflation)
+                    || scene
+                        .partitions
+                        .iter()
+                        .any(|w| w.footprint_distance(p) <= inflation);
             }
         }
         Ok(NavGrid {

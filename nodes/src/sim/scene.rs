@@ -24,7 +24,11 @@
 //!
 //! The material's effect on depth (rates in `config/default.toml` `[sim]`) is applied by the
 //! simulator's depth artefacts (`sim/artefacts.rs`); the detector and ground truth ignore it.
+//!
+//! Partition walls (`[[partition]]`, floor-to-ceiling boxes that are structure, not objects) are
+//! described and validated in [`super::partition`].
 
+use super::partition::{self, PARTITION_KEYS, Partition, RawPartition};
 use crate::geom::Cuboid;
 use glam::{Vec2, Vec3};
 use parry3d::math::{Pose, Rot3};
@@ -339,6 +343,9 @@ pub struct Scene {
     pub robot_start: [f32; 3],
     /// The objects, in file order.
     pub objects: Vec<SceneObject>,
+    /// Partition walls (structure: rendered and navigated around like walls, never detected
+    /// or scored), in file order.
+    pub partitions: Vec<Partition>,
     /// Ground-truth cluster of each object: the index of the background object whose top face
     /// supports it (its own index for background objects), `None` if none does.
     pub clusters: Vec<Option<usize>>,
@@ -353,6 +360,8 @@ struct RawScene {
     robot: RawRobot,
     #[serde(default)]
     object: Vec<RawObject>,
+    #[serde(default)]
+    partition: Vec<RawPartition>,
 }
 
 #[derive(Debug, Deserialize)]
@@ -392,7 +401,7 @@ enum RawShape {
     Cylinder,
 }
 
-const SCENE_KEYS: [&str; 4] = ["name", "room", "robot", "object"];
+const SCENE_KEYS: [&str; 5] = ["name", "room", "robot", "object", "partition"];
 const ROOM_KEYS: [&str; 3] = ["min", "max", "height"];
 const ROBOT_KEYS: [&str; 1] = ["start"];
 const OBJECT_KEYS: [&str; 8] = [
@@ -480,14 +489,20 @@ fn check_keys(file: &Path, table: &toml::Table) -> Result<(), SceneError> {
             return Err(unknown(name, k));
         }
     }
-    if let Some(toml::Value::Array(objects)) = table.get("object") {
-        for (i, o) in objects.iter().enumerate() {
+    for (array, keys) in [
+        ("object", &OBJECT_KEYS[..]),
+        ("partition", &PARTITION_KEYS[..]),
+    ] {
+        let Some(toml::Value::Array(items)) = table.get(array) else {
+            continue;
+        };
+        for (i, o) in items.iter().enumerate() {
             let Some(t) = o.as_table() else { continue };
-            if let Some(k) = t.keys().find(|k| !OBJECT_KEYS.contains(&k.as_str())) {
+            if let Some(k) = t.keys().find(|k| !keys.contains(&k.as_str())) {
                 let name = t
                     .get("name")
                     .and_then(|n| n.as_str())
-                    .map_or_else(|| format!("object[{i}]"), str::to_string);
+                    .map_or_else(|| format!("{array}[{i}]"), str::to_string);
                 return Err(unknown(&name, k));
             }
         }
@@ -629,6 +644,7 @@ fn build(file: &Path, raw: RawScene) -> Result<Scene, SceneError> {
         objects.push(obj);
     }
 
+    let partitions = partition::build(file, &room, &objects, raw.partition)?;
     let start = raw.robot.start;
     let start_xy = Vec2::new(start[0], start[1]);
     if !start.iter().all(|v| v.is_finite())
@@ -636,12 +652,15 @@ fn build(file: &Path, raw: RawScene) -> Result<Scene, SceneError> {
         || objects
             .iter()
             .any(|o| o.footprint_distance(start_xy) <= 0.0)
+        || partitions
+            .iter()
+            .any(|p| p.footprint_distance(start_xy) <= 0.0)
     {
         return Err(invalid(
             "robot",
             "start",
             format!("{start:?}"),
-            "must be finite, inside the room and not inside an object",
+            "must be finite, inside the room and not inside an object or a partition",
         ));
     }
 
@@ -652,6 +671,7 @@ fn build(file: &Path, raw: RawScene) -> Result<Scene, SceneError> {
         room,
         robot_start: start,
         objects,
+        partitions,
         clusters,
     })
 }

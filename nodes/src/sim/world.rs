@@ -1,5 +1,5 @@
-//! The solid world for ray casting: the scene's objects in a parry3d bounding-volume hierarchy,
-//! inside the room's floor, ceiling and four walls.
+//! The solid world for ray casting: the scene's objects and partition walls in a parry3d
+//! bounding-volume hierarchy, inside the room's floor, ceiling and four walls.
 
 use super::scene::{Scene, SolidShape};
 use glam::Vec3;
@@ -41,26 +41,34 @@ pub struct World {
 }
 
 impl World {
-    /// Build the world of a scene: every object (instance `k + 1`) in a BVH, and the room's
-    /// floor, ceiling and walls ([`STRUCTURE`]).
+    /// Build the world of a scene: every object (solid `k`, instance `k + 1`) and then every
+    /// partition wall (instance [`STRUCTURE`]) in a BVH, and the room's floor, ceiling and walls
+    /// ([`STRUCTURE`]).
     pub fn new(scene: &Scene) -> World {
+        let prim = |pose: Pose, shape: SolidShape, instance: u8| {
+            let aabb = match &shape {
+                SolidShape::Cuboid(s) => s.aabb(&pose),
+                SolidShape::Cylinder(s) => s.aabb(&pose),
+            };
+            Prim {
+                pose,
+                shape,
+                instance,
+                aabb,
+            }
+        };
+        let height = scene.room.height;
         let prims: Vec<Prim> = scene
             .objects
             .iter()
             .enumerate()
-            .map(|(k, o)| {
-                let (pose, shape) = (o.pose(), o.shape_shrunk(0.0));
-                let aabb = match &shape {
-                    SolidShape::Cuboid(s) => s.aabb(&pose),
-                    SolidShape::Cylinder(s) => s.aabb(&pose),
-                };
-                Prim {
-                    pose,
-                    shape,
-                    instance: (k + 1) as u8,
-                    aabb,
-                }
-            })
+            .map(|(k, o)| prim(o.pose(), o.shape_shrunk(0.0), (k + 1) as u8))
+            .chain(
+                scene
+                    .partitions
+                    .iter()
+                    .map(|p| prim(p.pose(height), p.shape(height, 0.0), STRUCTURE)),
+            )
             .collect();
         let aabbs: Vec<Aabb> = prims.iter().map(|p| p.aabb).collect();
         let bvh = Bvh::from_leaves(BvhBuildStrategy::Binned, &aabbs);
@@ -73,9 +81,15 @@ impl World {
         }
     }
 
-    /// Number of object solids (scene objects) in the BVH.
+    /// Number of solids in the BVH: the scene's objects (solids `0..objects`), then its
+    /// partition walls. The `object_*` accessors take a solid index.
     pub fn solid_count(&self) -> usize {
         self.prims.len()
+    }
+
+    /// Instance id of solid `k`: `k + 1` for scene object `k`, [`STRUCTURE`] for a partition.
+    pub fn instance(&self, k: usize) -> u8 {
+        self.prims[k].instance
     }
 
     /// World-axis-aligned bounds `(min, max)` of scene object `k`.
