@@ -1,8 +1,11 @@
 //! The view-evaluation function F(v) = α f_a(v) + β f_c(v) (paper eq. 1) over an [`ObjectMap`]
 //! snapshot and one candidate camera pose. Pure, allocation-free (scratch lives on the stack).
 //!
-//! - f_a (eq. 3) sums over the foreground objects "in view": objects whose centre lies in the
-//!   candidate's frustum and sensing range (`Camera::sees` of the centre).
+//! - f_a (eq. 3) sums over the foreground objects "in view" that are relevant to the view: objects
+//!   whose centre lies in the candidate's frustum and sensing range (`Camera::sees` of the
+//!   centre), which belong to the target cluster or lie within `fa_radius` of the camera
+//!   ([`FaRelevance`]), and which are not hidden by other map objects or walls ([`sight`]:
+//!   at least `fa_min_visible` of their sample points unhidden).
 //! - H_IoU (eq. 21) projects every foreground object's cuboid that lies (partly) in front of the
 //!   camera; the occluders of `fo_i` are all other such objects ([`Occluders::All`], the paper's
 //!   sum) or only those whose centre is nearer ([`Occluders::Closer`]).
@@ -14,7 +17,8 @@
 use crate::config::CameraConfig;
 use crate::geom::{Camera, CameraMount, yaw_pitch_of};
 use crate::planner::clusters::cuboid;
-use crate::planner::config::{AblationConfig, Occluders, PlannerConfig};
+use crate::planner::config::{AblationConfig, FaRelevance, Occluders, PlannerConfig};
+use crate::planner::sight::{self, Walls};
 use crate::planner::terms::{self, View};
 use glam::{Affine3A, Vec3};
 use shm_types::{Candidate, MAX_OBJECTS, ObjectMap, sopm_shape};
@@ -34,6 +38,14 @@ pub struct EvalParams {
     pub cos_thresh: f32,
     /// Occluders in H_IoU.
     pub occluders: Occluders,
+    /// Which objects in the frustum f_a counts.
+    pub relevance: FaRelevance,
+    /// Radius of [`FaRelevance::Radius`], metres.
+    pub fa_radius: f32,
+    /// Whether hidden objects are out of view ([`sight`]).
+    pub occlusion: bool,
+    /// Least unhidden fraction of an object's sample points.
+    pub min_visible: f32,
     /// Term switches.
     pub ablation: AblationConfig,
 }
@@ -48,6 +60,10 @@ impl EvalParams {
             eps_cp: planner.eps_cp,
             cos_thresh: planner.theta_thresh_deg.to_radians().cos(),
             occluders: planner.occluders,
+            relevance: planner.fa_relevance,
+            fa_radius: planner.fa_radius,
+            occlusion: planner.fa_occlusion,
+            min_visible: planner.fa_min_visible,
             ablation: planner.ablation,
         }
     }
@@ -101,8 +117,45 @@ pub struct ContinuityTerms {
     pub covisible: u32,
 }
 
-/// Information abundance f_a (eq. 3) of a view.
+/// Whether foreground object `i` of the map counts in f_a of the view: centre in the frustum and
+/// range, relevant ([`FaRelevance`]; `Cluster` without a target counts every object) and, with
+/// occlusion on, not hidden.
+pub fn in_view(
+    map: &ObjectMap,
+    i: usize,
+    view: &View,
+    target: Option<&Target>,
+    walls: Option<&Walls<'_>>,
+    p: &EvalParams,
+) -> bool {
+    let o = &map.objects()[i];
+    let c = Vec3::from(o.center);
+    if o.is_background() || !view.sees(&p.camera, c) {
+        return false;
+    }
+    let relevant = match p.relevance {
+        FaRelevance::Frustum => true,
+        FaRelevance::Cluster => target.is_none_or(|t| o.cluster_id == t.cluster_id),
+        FaRelevance::Radius => c.distance(view.position) <= p.fa_radius,
+    };
+    relevant && (!p.occlusion || sight::is_visible(map, i, view.position, walls, p.min_visible))
+}
+
+/// Information abundance f_a (eq. 3) of a view without a target cluster (every relevant object
+/// in the frustum) and without walls (see [`abundance_for`]).
 pub fn abundance(map: &ObjectMap, view: &View, p: &EvalParams) -> AbundanceTerms {
+    abundance_for(map, view, None, None, p)
+}
+
+/// Information abundance f_a (eq. 3) of a view: the sum runs over the objects [`in_view`] for
+/// the target and walls given.
+pub fn abundance_for(
+    map: &ObjectMap,
+    view: &View,
+    target: Option<&Target>,
+    walls: Option<&Walls<'_>>,
+    p: &EvalParams,
+) -> AbundanceTerms {
     let objs = map.objects();
     // Image boxes and depths of every foreground object in front of the camera.
     let mut boxes = [[0.0f32; 4]; MAX_OBJECTS];
@@ -124,7 +177,7 @@ pub fn abundance(map: &ObjectMap, view: &View, p: &EvalParams) -> AbundanceTerms
     let mut t = AbundanceTerms::default();
     for (i, o) in objs.iter().enumerate() {
         let c = Vec3::from(o.center);
-        if o.is_background() || !view.sees(&p.camera, c) {
+        if !in_view(map, i, view, target, walls, p) {
             continue;
         }
         let h_sopm = if ab.h_sopm { o.h_sopm } else { 0.0 };
@@ -203,7 +256,8 @@ pub fn continuity(
     t
 }
 
-/// Evaluate one candidate camera pose: F(v) with every term, as a traced [`Candidate`].
+/// Evaluate one candidate camera pose: F(v) with every term, as a traced [`Candidate`]
+/// (occlusion by the map's cuboids only; [`evaluate_view_in`] adds walls).
 pub fn evaluate_view(
     map: &ObjectMap,
     world_from_camera: &Affine3A,
@@ -211,9 +265,21 @@ pub fn evaluate_view(
     w: Weights,
     p: &EvalParams,
 ) -> Candidate {
+    evaluate_view_in(map, world_from_camera, target, None, w, p)
+}
+
+/// [`evaluate_view`] with the walls of a navigation grid as occluders too.
+pub fn evaluate_view_in(
+    map: &ObjectMap,
+    world_from_camera: &Affine3A,
+    target: Option<&Target>,
+    walls: Option<&Walls<'_>>,
+    w: Weights,
+    p: &EvalParams,
+) -> Candidate {
     let view = View::new(*world_from_camera);
     let a = if w.alpha != 0.0 {
-        abundance(map, &view, p)
+        abundance_for(map, &view, target, walls, p)
     } else {
         AbundanceTerms::default()
     };
@@ -368,6 +434,8 @@ mod tests {
         fg(&mut m, 2, [3.2, 0.0, 0.0], [0.4, 0.4, 0.4]);
         let mut p = params();
         p.ablation.theta_sopm = false;
+        // The far cube is hidden behind the near one: count it anyway (H_IoU arithmetic).
+        p.occlusion = false;
         let v = View::new(level_view(0.0, 0.0));
         let t = abundance(&m, &v, &p);
         assert_eq!(t.in_view, 2);
@@ -399,6 +467,60 @@ mod tests {
         // 1's box, so object 1 loses (1.9 / 5.9)² of its area under the paper's "all" rule.
         let expect = 1.0 - (1.9f32 / 5.9).powi(2);
         assert!((t.h_iou_mean - expect).abs() < 1e-4, "{t:?}");
+    }
+
+    /// Three objects in the frustum, each worth 0.5 (H_sopm only): A (cluster 0, 1.24 m away),
+    /// B (cluster 5, 3.1 m), C (cluster 0, 2.52 m); none hides another. "frustum" counts all three, "cluster" with
+    /// target 0 counts A and C (every object without a target), "radius" (1.5 m) only A.
+    #[test]
+    fn relevance_filter_hand_computed() {
+        let mut m = boxed_zeroed::<ObjectMap>();
+        fg(&mut m, 1, [1.2, 0.3, 0.0], [0.1, 0.1, 0.1]);
+        let b = fg(&mut m, 2, [3.0, -0.8, 0.0], [0.1, 0.1, 0.1]);
+        m.objects[b].cluster_id = 5;
+        fg(&mut m, 3, [2.5, -0.3, 0.0], [0.1, 0.1, 0.1]);
+        let mut p = params();
+        p.ablation.h_iou = false;
+        p.ablation.theta_sopm = false;
+        let v = View::new(level_view(0.0, 0.0));
+        let target = Target {
+            cluster_id: 0,
+            centroid: Vec3::new(2.0, 0.0, 0.0),
+        };
+        let run = |rel, t: Option<&Target>, p: &mut EvalParams| {
+            p.relevance = rel;
+            let a = abundance_for(&m, &v, t, None, p);
+            (a.in_view, a.f_a)
+        };
+        assert_eq!(run(FaRelevance::Frustum, Some(&target), &mut p), (3, 1.5));
+        assert_eq!(run(FaRelevance::Cluster, Some(&target), &mut p), (2, 1.0));
+        assert_eq!(run(FaRelevance::Cluster, None, &mut p), (3, 1.5));
+        assert_eq!(run(FaRelevance::Radius, Some(&target), &mut p), (1, 0.5));
+        p.fa_radius = 2.6;
+        assert_eq!(run(FaRelevance::Radius, None, &mut p), (2, 1.0));
+    }
+
+    /// A cup 3 m ahead with a background box (a wall of the map) between: out of view with
+    /// occlusion on, in view with it off or with the box moved behind the cup.
+    #[test]
+    fn hidden_objects_are_not_in_view() {
+        let mut m = boxed_zeroed::<ObjectMap>();
+        let cup = fg(&mut m, 1, [3.0, 0.0, 0.0], [0.1, 0.1, 0.12]);
+        let wall = fg(&mut m, 2, [2.0, 0.0, 0.0], [0.2, 1.0, 1.0]);
+        m.objects[wall].background = 1;
+        let mut p = params();
+        let v = View::new(level_view(0.0, 0.0));
+        assert!(!in_view(&m, cup, &v, None, None, &p));
+        assert_eq!(abundance(&m, &v, &p).in_view, 0);
+        m.objects[wall].center = [4.0, 0.0, 0.0];
+        assert!(in_view(&m, cup, &v, None, None, &p));
+        m.objects[wall].center = [2.0, 0.0, 0.0];
+        p.occlusion = false;
+        assert!(in_view(&m, cup, &v, None, None, &p));
+        assert!(
+            !in_view(&m, wall, &v, None, None, &p),
+            "background never counts"
+        );
     }
 
     #[test]

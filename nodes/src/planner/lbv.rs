@@ -16,7 +16,7 @@ use crate::config::CameraConfig;
 use crate::geom::wrap_angle;
 use crate::planner::config::PlannerConfig;
 use crate::planner::evaluate::{
-    AbundanceTerms, ContinuityTerms, EvalParams, Target, Weights, abundance, candidate,
+    AbundanceTerms, ContinuityTerms, EvalParams, Target, Weights, abundance_for, candidate,
     continuity_from_offsets, covisible_offsets, evaluate_view,
 };
 use crate::planner::terms::View;
@@ -134,7 +134,7 @@ impl Lbv {
                 continue;
             }
             let a = if w.alpha != 0.0 {
-                abundance(map, &view, &self.params)
+                abundance_for(map, &view, target, None, &self.params)
             } else {
                 AbundanceTerms::default()
             };
