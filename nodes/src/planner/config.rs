@@ -268,6 +268,9 @@ pub struct PlannerConfig {
     /// Least fraction of an object's sample points (centre and 8 inner corners) a view must see
     /// unhidden for the object to count as in view.
     pub fa_min_visible: f32,
+    /// Occupied navigation-grid cells this far beyond a map object's estimated footprint (and the
+    /// grid's inflation) are taken for that object, not for a wall, metres.
+    pub fa_wall_slack: f32,
     /// Robot footprint radius for collision and reachability, metres.
     pub robot_radius: f32,
     /// Whether UNKNOWN cells of the navigation grid may be driven through.
@@ -318,6 +321,12 @@ impl PlannerConfig {
         )?;
         c.in_range("planner.robot_radius", self.robot_radius.into(), 0.0, 2.0)?;
         c.in_range("planner.fa_radius", self.fa_radius.into(), 0.01, 100.0)?;
+        c.in_range(
+            "planner.fa_wall_slack",
+            self.fa_wall_slack.into(),
+            0.0,
+            100.0,
+        )?;
         c.in_range(
             "planner.fa_min_visible",
             self.fa_min_visible.into(),

@@ -46,6 +46,8 @@ pub struct EvalParams {
     pub occlusion: bool,
     /// Least unhidden fraction of an object's sample points.
     pub min_visible: f32,
+    /// Slack of [`Walls::slack`], metres.
+    pub wall_slack: f32,
     /// Term switches.
     pub ablation: AblationConfig,
 }
@@ -64,6 +66,7 @@ impl EvalParams {
             fa_radius: planner.fa_radius,
             occlusion: planner.fa_occlusion,
             min_visible: planner.fa_min_visible,
+            wall_slack: planner.fa_wall_slack,
             ablation: planner.ablation,
         }
     }

@@ -248,6 +248,7 @@ impl GbvJob {
             } else {
                 0.0
             },
+            slack: p.eval.wall_slack,
         };
         let r2 = p.revisit_radius * p.revisit_radius;
         let mut decision = boxed_zeroed::<PlannerDecision>();

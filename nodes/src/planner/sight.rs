@@ -11,7 +11,9 @@
 //! - crosses a wall: an OCCUPIED cell of the navigation grid that no mapped object explains
 //!   (the grid is 2D and also holds tables and chairs, which the map's cuboids already model
 //!   with their height). A cell is explained when its centre lies within the footprint of a map
-//!   object grown by the grid's inflation and one cell; the last `inflation + cell` of the ray
+//!   object grown by the grid's inflation, one cell and `slack` (`[planner] fa_wall_slack`: an
+//!   estimated cuboid, from a partial view, can be smaller than the object); the last
+//!   `inflation + cell` of the ray
 //!   (the target's own surroundings) is not tested. An obstacle the map has not found yet is
 //!   taken for a wall: a conservative reading.
 //!
@@ -42,6 +44,9 @@ pub struct Walls<'a> {
     /// By how much the grid's obstacles are inflated (the robot radius for the simulator's
     /// pre-built map), metres.
     pub inflation: f32,
+    /// Extra distance around a map object's estimated footprint within which occupied cells are
+    /// taken for that object (an estimated cuboid can be smaller than the object), metres.
+    pub slack: f32,
 }
 
 /// The [`SAMPLES`] probe points of a cuboid: its centre and its corners at [`INNER`].
@@ -105,7 +110,7 @@ pub fn wall_blocks(walls: &Walls<'_>, map: &ObjectMap, from: Vec3, to: Vec3) -> 
     };
     let (mut tx, mut ty) = (next(ix, sx, a.x, d.x), next(iy, sy, a.y, d.y));
     let (dtx, dty) = (1.0 / d.x.abs().max(1e-9), 1.0 / d.y.abs().max(1e-9));
-    let margin = walls.inflation + res;
+    let margin = walls.inflation + res + walls.slack;
     let steps = (ex - ix).abs() + (ey - iy).abs();
     for _ in 0..=steps {
         if ix >= 0 && iy >= 0 && ix < w && iy < h {
@@ -263,6 +268,7 @@ mod tests {
         let walls = Walls {
             grid: &g,
             inflation: 0.0,
+            slack: 0.0,
         };
         let mut m = boxed_zeroed::<ObjectMap>();
         let far = obj(&mut m, [3.0, 0.0, 0.8], [0.1, 0.1, 0.1], false);
@@ -275,8 +281,17 @@ mod tests {
             1.0,
             "no grid, no wall"
         );
-        // The same cells explained by a (low) table's cuboid: no longer a wall.
-        let _table = obj(&mut m, [2.0, 0.0, 0.2], [0.2, 2.0, 0.4], true);
+        // A low table whose estimated cuboid ends 0.3 m short of the wall cells: with a slack of
+        // 0.3 m (not 0.2) the cells are taken for the table.
+        let table = obj(&mut m, [2.0, 0.0, 0.2], [0.2, 2.0, 0.4], true);
+        m.objects[table].center = [1.5, 0.0, 0.2];
+        m.objects[table].size = [0.2, 2.0, 0.4];
+        // Footprint x in [1.4, 1.6]; wall cell centres at 1.95 and 2.05: 0.35 and 0.45 away.
+        let slack = |s| Walls { slack: s, ..walls };
+        assert_eq!(visible_fraction(&m, far, cam, Some(&slack(0.2))), 0.0);
+        assert_eq!(visible_fraction(&m, far, cam, Some(&slack(0.36))), 1.0);
+        // The same cells inside a (low) table's cuboid: no longer a wall.
+        m.objects[table].center = [2.0, 0.0, 0.2];
         assert_eq!(visible_fraction(&m, far, cam, Some(&walls)), 1.0);
     }
 }
