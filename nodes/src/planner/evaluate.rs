@@ -5,7 +5,8 @@
 //!   whose centre lies in the candidate's frustum and sensing range (`Camera::sees` of the
 //!   centre), which belong to the target cluster or lie within `fa_radius` of the camera
 //!   ([`FaRelevance`]), and which are not hidden by other map objects or walls ([`sight`]:
-//!   at least `fa_min_visible` of their sample points unhidden).
+//!   at least `fa_min_visible` of their sample points unhidden). The filter is a [`FaFilter`]
+//!   (GBV: the configured one; [`evaluate_view`] and the baselines' scoring: none).
 //! - H_IoU (eq. 21) projects every foreground object's cuboid that lies (partly) in front of the
 //!   camera; the occluders of `fo_i` are all other such objects ([`Occluders::All`], the paper's
 //!   sum) or only those whose centre is nearer ([`Occluders::Closer`]).
@@ -38,18 +39,47 @@ pub struct EvalParams {
     pub cos_thresh: f32,
     /// Occluders in H_IoU.
     pub occluders: Occluders,
+    /// Term switches.
+    pub ablation: AblationConfig,
+}
+
+/// Which objects in the frustum f_a's sum runs over (`[planner] fa_*`). Kept apart from
+/// [`EvalParams`], which the baselines' job results carry by value.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct FaFilter {
     /// Which objects in the frustum f_a counts.
     pub relevance: FaRelevance,
     /// Radius of [`FaRelevance::Radius`], metres.
-    pub fa_radius: f32,
+    pub radius: f32,
     /// Whether hidden objects are out of view ([`sight`]).
     pub occlusion: bool,
     /// Least unhidden fraction of an object's sample points.
     pub min_visible: f32,
     /// Slack of [`Walls::slack`], metres.
     pub wall_slack: f32,
-    /// Term switches.
-    pub ablation: AblationConfig,
+}
+
+impl FaFilter {
+    /// Every foreground object whose centre is in the frustum, hidden or not (the sum as it was
+    /// before the filter; the baselines' scoring of their chosen views keeps it).
+    pub const FRUSTUM: FaFilter = FaFilter {
+        relevance: FaRelevance::Frustum,
+        radius: f32::INFINITY,
+        occlusion: false,
+        min_visible: 0.0,
+        wall_slack: 0.0,
+    };
+
+    /// From the configuration.
+    pub fn new(planner: &PlannerConfig) -> Self {
+        Self {
+            relevance: planner.fa_relevance,
+            radius: planner.fa_radius,
+            occlusion: planner.fa_occlusion,
+            min_visible: planner.fa_min_visible,
+            wall_slack: planner.fa_wall_slack,
+        }
+    }
 }
 
 impl EvalParams {
@@ -62,11 +92,6 @@ impl EvalParams {
             eps_cp: planner.eps_cp,
             cos_thresh: planner.theta_thresh_deg.to_radians().cos(),
             occluders: planner.occluders,
-            relevance: planner.fa_relevance,
-            fa_radius: planner.fa_radius,
-            occlusion: planner.fa_occlusion,
-            min_visible: planner.fa_min_visible,
-            wall_slack: planner.fa_wall_slack,
             ablation: planner.ablation,
         }
     }
@@ -129,6 +154,7 @@ pub fn in_view(
     view: &View,
     target: Option<&Target>,
     walls: Option<&Walls<'_>>,
+    fa: &FaFilter,
     p: &EvalParams,
 ) -> bool {
     let o = &map.objects()[i];
@@ -136,18 +162,18 @@ pub fn in_view(
     if o.is_background() || !view.sees(&p.camera, c) {
         return false;
     }
-    let relevant = match p.relevance {
+    let relevant = match fa.relevance {
         FaRelevance::Frustum => true,
         FaRelevance::Cluster => target.is_none_or(|t| o.cluster_id == t.cluster_id),
-        FaRelevance::Radius => c.distance(view.position) <= p.fa_radius,
+        FaRelevance::Radius => c.distance(view.position) <= fa.radius,
     };
-    relevant && (!p.occlusion || sight::is_visible(map, i, view.position, walls, p.min_visible))
+    relevant && (!fa.occlusion || sight::is_visible(map, i, view.position, walls, fa.min_visible))
 }
 
-/// Information abundance f_a (eq. 3) of a view without a target cluster (every relevant object
-/// in the frustum) and without walls (see [`abundance_for`]).
+/// Information abundance f_a (eq. 3) of a view over every foreground object in the frustum
+/// ([`FaFilter::FRUSTUM`]; see [`abundance_for`]).
 pub fn abundance(map: &ObjectMap, view: &View, p: &EvalParams) -> AbundanceTerms {
-    abundance_for(map, view, None, None, p)
+    abundance_for(map, view, None, None, &FaFilter::FRUSTUM, p)
 }
 
 /// Information abundance f_a (eq. 3) of a view: the sum runs over the objects [`in_view`] for
@@ -157,6 +183,7 @@ pub fn abundance_for(
     view: &View,
     target: Option<&Target>,
     walls: Option<&Walls<'_>>,
+    fa: &FaFilter,
     p: &EvalParams,
 ) -> AbundanceTerms {
     let objs = map.objects();
@@ -180,7 +207,7 @@ pub fn abundance_for(
     let mut t = AbundanceTerms::default();
     for (i, o) in objs.iter().enumerate() {
         let c = Vec3::from(o.center);
-        if !in_view(map, i, view, target, walls, p) {
+        if !in_view(map, i, view, target, walls, fa, p) {
             continue;
         }
         let h_sopm = if ab.h_sopm { o.h_sopm } else { 0.0 };
@@ -259,8 +286,8 @@ pub fn continuity(
     t
 }
 
-/// Evaluate one candidate camera pose: F(v) with every term, as a traced [`Candidate`]
-/// (occlusion by the map's cuboids only; [`evaluate_view_in`] adds walls).
+/// Evaluate one candidate camera pose: F(v) with every term, as a traced [`Candidate`], f_a
+/// over every object in the frustum ([`FaFilter::FRUSTUM`]; [`evaluate_view_in`] filters).
 pub fn evaluate_view(
     map: &ObjectMap,
     world_from_camera: &Affine3A,
@@ -268,21 +295,31 @@ pub fn evaluate_view(
     w: Weights,
     p: &EvalParams,
 ) -> Candidate {
-    evaluate_view_in(map, world_from_camera, target, None, w, p)
+    evaluate_view_in(
+        map,
+        world_from_camera,
+        target,
+        None,
+        &FaFilter::FRUSTUM,
+        w,
+        p,
+    )
 }
 
-/// [`evaluate_view`] with the walls of a navigation grid as occluders too.
+/// [`evaluate_view`] with f_a's sum filtered by `fa` (relevance, occlusion by the map's cuboids
+/// and `walls`).
 pub fn evaluate_view_in(
     map: &ObjectMap,
     world_from_camera: &Affine3A,
     target: Option<&Target>,
     walls: Option<&Walls<'_>>,
+    fa: &FaFilter,
     w: Weights,
     p: &EvalParams,
 ) -> Candidate {
     let view = View::new(*world_from_camera);
     let a = if w.alpha != 0.0 {
-        abundance_for(map, &view, target, walls, p)
+        abundance_for(map, &view, target, walls, fa, p)
     } else {
         AbundanceTerms::default()
     };
@@ -437,8 +474,6 @@ mod tests {
         fg(&mut m, 2, [3.2, 0.0, 0.0], [0.4, 0.4, 0.4]);
         let mut p = params();
         p.ablation.theta_sopm = false;
-        // The far cube is hidden behind the near one: count it anyway (H_IoU arithmetic).
-        p.occlusion = false;
         let v = View::new(level_view(0.0, 0.0));
         let t = abundance(&m, &v, &p);
         assert_eq!(t.in_view, 2);
@@ -490,17 +525,19 @@ mod tests {
             cluster_id: 0,
             centroid: Vec3::new(2.0, 0.0, 0.0),
         };
-        let run = |rel, t: Option<&Target>, p: &mut EvalParams| {
-            p.relevance = rel;
-            let a = abundance_for(&m, &v, t, None, p);
+        let mut fa = FaFilter::new(&PlannerConfig::default());
+        assert_eq!(fa.radius, 1.5);
+        let run = |rel, t: Option<&Target>, fa: &mut FaFilter| {
+            fa.relevance = rel;
+            let a = abundance_for(&m, &v, t, None, fa, &p);
             (a.in_view, a.f_a)
         };
-        assert_eq!(run(FaRelevance::Frustum, Some(&target), &mut p), (3, 1.5));
-        assert_eq!(run(FaRelevance::Cluster, Some(&target), &mut p), (2, 1.0));
-        assert_eq!(run(FaRelevance::Cluster, None, &mut p), (3, 1.5));
-        assert_eq!(run(FaRelevance::Radius, Some(&target), &mut p), (1, 0.5));
-        p.fa_radius = 2.6;
-        assert_eq!(run(FaRelevance::Radius, None, &mut p), (2, 1.0));
+        assert_eq!(run(FaRelevance::Frustum, Some(&target), &mut fa), (3, 1.5));
+        assert_eq!(run(FaRelevance::Cluster, Some(&target), &mut fa), (2, 1.0));
+        assert_eq!(run(FaRelevance::Cluster, None, &mut fa), (3, 1.5));
+        assert_eq!(run(FaRelevance::Radius, Some(&target), &mut fa), (1, 0.5));
+        fa.radius = 2.6;
+        assert_eq!(run(FaRelevance::Radius, None, &mut fa), (2, 1.0));
     }
 
     /// A cup 3 m ahead with a background box (a wall of the map) between: out of view with
@@ -511,17 +548,24 @@ mod tests {
         let cup = fg(&mut m, 1, [3.0, 0.0, 0.0], [0.1, 0.1, 0.12]);
         let wall = fg(&mut m, 2, [2.0, 0.0, 0.0], [0.2, 1.0, 1.0]);
         m.objects[wall].background = 1;
-        let mut p = params();
+        let p = params();
+        let mut fa = FaFilter::new(&PlannerConfig::default());
+        assert!(fa.occlusion);
         let v = View::new(level_view(0.0, 0.0));
-        assert!(!in_view(&m, cup, &v, None, None, &p));
-        assert_eq!(abundance(&m, &v, &p).in_view, 0);
+        assert!(!in_view(&m, cup, &v, None, None, &fa, &p));
+        assert_eq!(abundance_for(&m, &v, None, None, &fa, &p).in_view, 0);
         m.objects[wall].center = [4.0, 0.0, 0.0];
-        assert!(in_view(&m, cup, &v, None, None, &p));
+        assert!(in_view(&m, cup, &v, None, None, &fa, &p));
         m.objects[wall].center = [2.0, 0.0, 0.0];
-        p.occlusion = false;
-        assert!(in_view(&m, cup, &v, None, None, &p));
+        fa.occlusion = false;
+        assert!(in_view(&m, cup, &v, None, None, &fa, &p));
+        assert_eq!(
+            abundance(&m, &v, &p).in_view,
+            1,
+            "the unfiltered sum counts it"
+        );
         assert!(
-            !in_view(&m, wall, &v, None, None, &p),
+            !in_view(&m, wall, &v, None, None, &fa, &p),
             "background never counts"
         );
     }

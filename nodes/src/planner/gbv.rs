@@ -22,7 +22,7 @@
 //! low-priority pool and poll for the [`GbvResult`], which hands the buffers back for reuse.
 
 use crate::planner::clusters::{ClusterInfo, unfinished_centroid};
-use crate::planner::evaluate::{EvalParams, Target, Weights, evaluate_view_in};
+use crate::planner::evaluate::{EvalParams, FaFilter, Target, Weights, evaluate_view_in};
 use crate::planner::lbv::{Lbv, neck_yaws};
 use crate::planner::reach::NavParams;
 use crate::planner::sight::Walls;
@@ -52,6 +52,8 @@ pub struct GbvParams {
     pub sectors: usize,
     /// How the neck yaw of a candidate is chosen.
     pub neck: GbvNeck,
+    /// Which objects f_a counts.
+    pub fa: FaFilter,
 }
 
 /// The neck yaw a GBV candidate is scored at: the LBV's choice (its candidates and weights).
@@ -104,6 +106,7 @@ impl GbvParams {
             revisit_radius: cfg.gbv.revisit_radius,
             sectors: cfg.bootstrap.sectors,
             neck: GbvNeck::new(cfg),
+            fa: FaFilter::new(cfg),
         }
     }
 }
@@ -181,7 +184,7 @@ pub fn evaluate_poses_in(
                 };
                 let pose = p.eval.mount.camera_pose(*b, yaw, pitch);
                 (
-                    evaluate_view_in(map, &pose, target, walls, p.weights, &p.eval),
+                    evaluate_view_in(map, &pose, target, walls, &p.fa, p.weights, &p.eval),
                     yaw,
                 )
             },
@@ -198,10 +201,16 @@ pub struct GbvChoice {
     pub score: f32,
     /// Cluster served.
     pub cluster_id: i32,
-    /// The neck yaw the view was scored at (relative to the base), radians.
-    pub neck_yaw: f32,
     /// The evaluated candidate.
     pub candidate: Candidate,
+}
+
+impl GbvChoice {
+    /// The neck yaw (relative to the base) the view was scored at: the traced camera yaw minus
+    /// the base yaw.
+    pub fn neck_yaw(&self) -> f32 {
+        crate::geom::wrap_angle(self.candidate.yaw - self.pose[2])
+    }
 }
 
 /// One GBV round as an owned job.
@@ -248,7 +257,7 @@ impl GbvJob {
             } else {
                 0.0
             },
-            slack: p.eval.wall_slack,
+            slack: p.fa.wall_slack,
         };
         let r2 = p.revisit_radius * p.revisit_radius;
         let mut decision = boxed_zeroed::<PlannerDecision>();
@@ -290,7 +299,7 @@ impl GbvJob {
                 cluster_id: info.id,
                 centroid: unfinished_centroid(&self.map, info, p.eval.eps_sopm),
             };
-            let (cands, necks) = evaluate_poses_in(&self.map, &ok, Some(&target), Some(&walls), &p);
+            let (cands, _) = evaluate_poses_in(&self.map, &ok, Some(&target), Some(&walls), &p);
             let Some(k) = argmax(&cands) else {
                 continue;
             };
@@ -298,7 +307,6 @@ impl GbvJob {
                 pose: ok[k],
                 score: cands[k].value,
                 cluster_id: info.id,
-                neck_yaw: necks[k],
                 candidate: cands[k],
             });
             fill_decision(&mut decision, &cands, k, &dropped, &p);
@@ -439,18 +447,22 @@ mod tests {
         let b = r.best.expect("a reachable candidate");
         let mut lbv = Lbv::new(&cfg, &CameraConfig::default());
         let taken = neck_for(&mut lbv, &r.map, b.pose, Some(&target));
-        assert_eq!(b.neck_yaw, taken);
+        assert!(
+            (b.neck_yaw() - taken).abs() < 1e-4,
+            "{} vs {taken}",
+            b.neck_yaw()
+        );
         assert!(b.candidate.objects_in_view >= 1);
         let chosen = r.decision.candidates[..r.decision.count as usize]
             .iter()
             .find(|c| c.chosen == 1)
             .unwrap();
-        let yaw = crate::geom::wrap_angle(b.pose[2] + b.neck_yaw);
+        let yaw = crate::geom::wrap_angle(b.pose[2] + taken);
         assert!((chosen.yaw - yaw).abs() < 1e-4);
         let cam = p
             .eval
             .mount
-            .camera_pose(b.pose, b.neck_yaw, p.eval.mount.pitch());
+            .camera_pose(b.pose, taken, p.eval.mount.pitch());
         assert!(Vec3::from(cam.translation).distance(Vec3::from(chosen.position)) < 1e-4);
     }
 }

@@ -74,7 +74,7 @@ pub use config::{
     AblationConfig, BootstrapConfig, CoverageConfig, FaRelevance, FrontierConfig, GbvConfig,
     LbvConfig, Occluders, PlannerConfig, PlannerKind, UnknownPlanner, UnknownTerm,
 };
-pub use evaluate::{EvalParams, Target, Weights, evaluate_view, evaluate_view_in};
+pub use evaluate::{EvalParams, FaFilter, Target, Weights, evaluate_view, evaluate_view_in};
 pub use gbv::{GbvJob, GbvResult};
 pub use lbv::Lbv;
 pub use session::{

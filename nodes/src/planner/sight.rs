@@ -19,7 +19,8 @@
 //!
 //! Everything here is allocation-free (it reads the map and grid by reference), so the test could
 //! run on the LBV thread; the LBV runs with α = 0 and never evaluates f_a, so in practice only
-//! GBV rounds (with the navigation grid) and baseline scoring (map cuboids only) use it.
+//! GBV rounds (with the navigation grid) use it. The baselines' scoring of their own views keeps
+//! the unfiltered sum (`FaFilter::FRUSTUM`).
 
 use crate::geom::Cuboid;
 use crate::planner::clusters::cuboid;
