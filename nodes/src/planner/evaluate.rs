@@ -551,6 +551,7 @@ mod tests {
         let p = params();
         let mut fa = FaFilter::new(&PlannerConfig::default());
         assert!(fa.occlusion);
+        fa.relevance = FaRelevance::Frustum; // the cup is 3 m away, beyond the default radius
         let v = View::new(level_view(0.0, 0.0));
         assert!(!in_view(&m, cup, &v, None, None, &fa, &p));
         assert_eq!(abundance_for(&m, &v, None, None, &fa, &p).in_view, 0);

@@ -407,8 +407,10 @@ mod tests {
     #[test]
     fn neck_aware_gbv_scores_the_yaw_that_sees_the_cluster() {
         let cfg = PlannerConfig::default();
-        let p = GbvParams::new(&cfg, &CameraConfig::default());
+        let mut p = GbvParams::new(&cfg, &CameraConfig::default());
         assert!(p.neck.aware);
+        // The cup is 3.3 m from the ring: count the target cluster's objects.
+        p.fa.relevance = crate::planner::config::FaRelevance::Cluster;
         let m = long_table();
         let info = cluster_info(&m, 7, cfg.eps_sopm).unwrap();
         let target = Target {
