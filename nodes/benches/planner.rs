@@ -80,6 +80,8 @@ fn gbv_params(n: usize) -> GbvParams {
         },
         revisit_radius: 0.5,
         sectors: 8,
+        neck: nodes::planner::gbv::GbvNeck::new(&cfg),
+        fa: nodes::planner::evaluate::FaFilter::new(&cfg),
     }
 }
 

@@ -369,7 +369,7 @@ pub struct MapObject {
     pub observations: u32,
     /// Mean cell entropy of the SOPM (eq. 10), 1.0 when unobserved.
     pub h_sopm: f32,
-    /// Association confidence of the newest association, `1 − p` (eq. 20).
+    /// Association confidence C_asso (eq. 20; the mapper's `[mapper.association] c_asso` says how).
     pub c_asso: f32,
     /// Best line of sight (eq. 11), world frame, not normalised; zero if undefined.
     pub l_best: [f32; 3],

@@ -94,9 +94,24 @@ pub struct AssociationConfig {
     pub front_tolerance: f32,
     /// Growth of the detection box when selecting visible reference points, pixels.
     pub bbox_margin_px: f32,
+    /// How C_asso (eq. 20) is computed.
+    pub c_asso: CAssoMode,
+    /// Weight of the newest test in the running rejection rate of [`CAssoMode::Acceptance`].
+    pub c_asso_rate: f32,
     /// Groups of look-alike class names: an observation may join an object of another class of
     /// its group (class by score-weighted vote). `[]`: the label must match (the paper).
     pub lookalike: Vec<Vec<String>>,
+}
+
+/// How an object's association confidence C_asso (eq. 20) is computed
+/// ([`super::association::acceptance_confidence`]).
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Deserialize)]
+#[serde(rename_all = "lowercase")]
+pub enum CAssoMode {
+    /// From the running rate of refused association tests (stable; the default).
+    Acceptance,
+    /// `1 − p` of the newest test, as eq. (20) is written.
+    Newest,
 }
 
 /// `[mapper.extensions]` section: each addition beyond the paper, on (`true`) or off.
@@ -412,6 +427,12 @@ impl MapperConfig {
             }
         }
         c.in_range("mapper.association.alpha", a.alpha, 0.0, 1.0)?;
+        c.in_range(
+            "mapper.association.c_asso_rate",
+            a.c_asso_rate.into(),
+            1e-4,
+            1.0,
+        )?;
         c.count(
             "mapper.association.max_test_points",
             a.max_test_points as usize,

@@ -74,8 +74,8 @@ use std::collections::HashMap;
 use wilcoxon::RankScratch;
 
 pub use config::{
-    AssociationConfig, ExistenceConfig, ExtensionsConfig, MapperConfig, SegmentationConfig,
-    SopmConfig,
+    AssociationConfig, CAssoMode, ExistenceConfig, ExtensionsConfig, MapperConfig,
+    SegmentationConfig, SopmConfig,
 };
 
 /// Why a frame was refused.
@@ -433,7 +433,8 @@ impl Mapper {
                     &mut self.test_q,
                 );
                 let max = a.max_test_points as usize;
-                let (p, accepted) = if self.test_q.len() >= a.min_reference as usize {
+                let tested = self.test_q.len() >= a.min_reference as usize;
+                let (p, accepted) = if tested {
                     let r = self.ranks.test_points(&self.test_p, &self.test_q, max);
                     stats.tests += 1;
                     stats.tests_passed += (r.p > a.alpha) as u32;
@@ -447,6 +448,7 @@ impl Mapper {
                     detection: k,
                     object: j,
                     p,
+                    tested,
                     accepted,
                     inside,
                 });
@@ -465,7 +467,8 @@ impl Mapper {
                 Some(c) => {
                     let c = cands[c];
                     let o = &mut self.objects[c.object];
-                    o.c_asso = (1.0 - c.p).clamp(0.0, 1.0) as f32;
+                    association::record(&mut o.asso, &c, &self.cfg.association);
+                    o.c_asso = o.asso.c_asso;
                     o.vote(det.class_id, det.score);
                     o.hit = true;
                     stats.associated += 1;
@@ -478,7 +481,9 @@ impl Mapper {
                         .filter(|c| c.detection == k && c.inside)
                         .min_by(|x, y| x.p.total_cmp(&y.p).reverse());
                     if let Some(c) = blocker.filter(|_| self.cfg.extensions.inside_reject) {
-                        self.objects[c.object].c_asso = (1.0 - c.p).clamp(0.0, 1.0) as f32;
+                        let o = &mut self.objects[c.object];
+                        association::record(&mut o.asso, c, &self.cfg.association);
+                        o.c_asso = o.asso.c_asso;
                         stats.rejected += 1;
                         None
                     } else {

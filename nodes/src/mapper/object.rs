@@ -66,10 +66,13 @@ pub struct MappedObject {
     pub observations: u32,
     /// Time of the first observation, ns.
     pub first_seen_ns: u64,
-    /// `1 − p` of the newest association attempt (eq. 20). An object never associated yet has no
-    /// evidence that its points belong together, so it starts at 1 (highest observation priority:
-    /// f_a multiplies by C_asso, and 0 would make a new object invisible to the GBV).
+    /// C_asso (eq. 20, see [`super::association`]): by default a confidence from the running rate
+    /// of refused association tests. An object never tested yet has no evidence against its
+    /// association, so it starts at 1 (f_a multiplies by C_asso, and 0 would make a new object
+    /// invisible to the GBV).
     pub c_asso: f32,
+    /// The running association record behind `c_asso`.
+    pub asso: super::association::AssoRecord,
     /// Points merged.
     pub point_count: u32,
     /// Existence log-odds ([`super::existence`]).
@@ -112,6 +115,7 @@ impl MappedObject {
             observations: 0,
             first_seen_ns: now_ns,
             c_asso: 1.0,
+            asso: Default::default(),
             point_count: 0,
             existence: 0.0,
             hit: false,
@@ -202,7 +206,10 @@ impl MappedObject {
         }
         self.observations = self.observations.saturating_add(other.observations);
         self.first_seen_ns = self.first_seen_ns.min(other.first_seen_ns);
-        self.c_asso = self.c_asso.max(other.c_asso);
+        if other.c_asso > self.c_asso {
+            self.c_asso = other.c_asso;
+            self.asso = other.asso;
+        }
         self.existence = self.existence.max(other.existence);
         self.hit |= other.hit;
         if self.support_height.is_none() {

@@ -63,6 +63,20 @@ pub enum Occluders {
     Closer,
 }
 
+/// Which foreground objects f_a (eq. 3) sums over, among those in the view's frustum.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Deserialize)]
+#[serde(rename_all = "lowercase")]
+pub enum FaRelevance {
+    /// Only the objects of the cluster the view is evaluated for (the GBV's target cluster);
+    /// without a target, every object in the frustum.
+    Cluster,
+    /// Only objects whose centre lies within `fa_radius` of the camera (the public reference
+    /// code counts objects within 1.5 m of the view).
+    Radius,
+    /// Every foreground object in the frustum and sensing range, of any cluster and state.
+    Frustum,
+}
+
 /// Term switches for ablation studies. A disabled multiplicative factor (cos θ_sopm, C_asso,
 /// N_cp, cos θ_c) is replaced by 1; a disabled additive term (H_sopm, H_IoU) by 0.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Deserialize)]
@@ -135,6 +149,9 @@ pub struct GbvConfig {
     /// Candidates of a cluster within this distance of one of its earlier GBV goals (reached or
     /// refused) are dropped, so that every round moves the base to a new view, metres.
     pub revisit_radius: f32,
+    /// Score each candidate base pose at the neck yaw the LBV will choose there (false: neck 0,
+    /// the camera on the cluster centre).
+    pub neck_aware: bool,
 }
 
 impl Default for GbvConfig {
@@ -268,6 +285,19 @@ pub struct PlannerConfig {
     pub theta_thresh_deg: f32,
     /// Occluders in H_IoU.
     pub occluders: Occluders,
+    /// Which objects in the frustum f_a counts.
+    pub fa_relevance: FaRelevance,
+    /// Radius of [`FaRelevance::Radius`] around the camera, metres.
+    pub fa_radius: f32,
+    /// Whether an object counts as in view only if it is not hidden (ray casts against the map's
+    /// cuboids and, for the GBV, the wall cells of the navigation grid).
+    pub fa_occlusion: bool,
+    /// Least fraction of an object's sample points (centre and 8 inner corners) a view must see
+    /// unhidden for the object to count as in view.
+    pub fa_min_visible: f32,
+    /// Occupied navigation-grid cells this far beyond a map object's estimated footprint (and the
+    /// grid's inflation) are taken for that object, not for a wall, metres.
+    pub fa_wall_slack: f32,
     /// Robot footprint radius for collision and reachability, metres.
     pub robot_radius: f32,
     /// Whether UNKNOWN cells of the navigation grid may be driven through.
@@ -319,6 +349,19 @@ impl PlannerConfig {
             180.0,
         )?;
         c.in_range("planner.robot_radius", self.robot_radius.into(), 0.0, 2.0)?;
+        c.in_range("planner.fa_radius", self.fa_radius.into(), 0.01, 100.0)?;
+        c.in_range(
+            "planner.fa_wall_slack",
+            self.fa_wall_slack.into(),
+            0.0,
+            100.0,
+        )?;
+        c.in_range(
+            "planner.fa_min_visible",
+            self.fa_min_visible.into(),
+            0.0,
+            1.0,
+        )?;
         let g = &self.gbv;
         c.count("planner.gbv.candidates", g.candidates, 1, 100_000)?;
         c.in_range("planner.gbv.alpha", g.alpha.into(), 0.0, 100.0)?;

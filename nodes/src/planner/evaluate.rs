@@ -1,8 +1,12 @@
 //! The view-evaluation function F(v) = α f_a(v) + β f_c(v) (paper eq. 1) over an [`ObjectMap`]
 //! snapshot and one candidate camera pose. Pure, allocation-free (scratch lives on the stack).
 //!
-//! - f_a (eq. 3) sums over the foreground objects "in view": objects whose centre lies in the
-//!   candidate's frustum and sensing range (`Camera::sees` of the centre).
+//! - f_a (eq. 3) sums over the foreground objects "in view" that are relevant to the view: objects
+//!   whose centre lies in the candidate's frustum and sensing range (`Camera::sees` of the
+//!   centre), which belong to the target cluster or lie within `fa_radius` of the camera
+//!   ([`FaRelevance`]), and which are not hidden by other map objects or walls ([`sight`]:
+//!   at least `fa_min_visible` of their sample points unhidden). The filter is a [`FaFilter`]
+//!   (GBV: the configured one; [`evaluate_view`] and the baselines' scoring: none).
 //! - H_IoU (eq. 21) projects every foreground object's cuboid that lies (partly) in front of the
 //!   camera; the occluders of `fo_i` are all other such objects ([`Occluders::All`], the paper's
 //!   sum) or only those whose centre is nearer ([`Occluders::Closer`]).
@@ -14,7 +18,8 @@
 use crate::config::CameraConfig;
 use crate::geom::{Camera, CameraMount, yaw_pitch_of};
 use crate::planner::clusters::cuboid;
-use crate::planner::config::{AblationConfig, Occluders, PlannerConfig};
+use crate::planner::config::{AblationConfig, FaRelevance, Occluders, PlannerConfig};
+use crate::planner::sight::{self, Walls};
 use crate::planner::terms::{self, View};
 use glam::{Affine3A, Vec3};
 use shm_types::{Candidate, MAX_OBJECTS, ObjectMap, sopm_shape};
@@ -36,6 +41,45 @@ pub struct EvalParams {
     pub occluders: Occluders,
     /// Term switches.
     pub ablation: AblationConfig,
+}
+
+/// Which objects in the frustum f_a's sum runs over (`[planner] fa_*`). Kept apart from
+/// [`EvalParams`], which the baselines' job results carry by value.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct FaFilter {
+    /// Which objects in the frustum f_a counts.
+    pub relevance: FaRelevance,
+    /// Radius of [`FaRelevance::Radius`], metres.
+    pub radius: f32,
+    /// Whether hidden objects are out of view ([`sight`]).
+    pub occlusion: bool,
+    /// Least unhidden fraction of an object's sample points.
+    pub min_visible: f32,
+    /// Slack of [`Walls::slack`], metres.
+    pub wall_slack: f32,
+}
+
+impl FaFilter {
+    /// Every foreground object whose centre is in the frustum, hidden or not (the sum as it was
+    /// before the filter; the baselines' scoring of their chosen views keeps it).
+    pub const FRUSTUM: FaFilter = FaFilter {
+        relevance: FaRelevance::Frustum,
+        radius: f32::INFINITY,
+        occlusion: false,
+        min_visible: 0.0,
+        wall_slack: 0.0,
+    };
+
+    /// From the configuration.
+    pub fn new(planner: &PlannerConfig) -> Self {
+        Self {
+            relevance: planner.fa_relevance,
+            radius: planner.fa_radius,
+            occlusion: planner.fa_occlusion,
+            min_visible: planner.fa_min_visible,
+            wall_slack: planner.fa_wall_slack,
+        }
+    }
 }
 
 impl EvalParams {
@@ -101,8 +145,47 @@ pub struct ContinuityTerms {
     pub covisible: u32,
 }
 
-/// Information abundance f_a (eq. 3) of a view.
+/// Whether foreground object `i` of the map counts in f_a of the view: centre in the frustum and
+/// range, relevant ([`FaRelevance`]; `Cluster` without a target counts every object) and, with
+/// occlusion on, not hidden.
+pub fn in_view(
+    map: &ObjectMap,
+    i: usize,
+    view: &View,
+    target: Option<&Target>,
+    walls: Option<&Walls<'_>>,
+    fa: &FaFilter,
+    p: &EvalParams,
+) -> bool {
+    let o = &map.objects()[i];
+    let c = Vec3::from(o.center);
+    if o.is_background() || !view.sees(&p.camera, c) {
+        return false;
+    }
+    let relevant = match fa.relevance {
+        FaRelevance::Frustum => true,
+        FaRelevance::Cluster => target.is_none_or(|t| o.cluster_id == t.cluster_id),
+        FaRelevance::Radius => c.distance(view.position) <= fa.radius,
+    };
+    relevant && (!fa.occlusion || sight::is_visible(map, i, view.position, walls, fa.min_visible))
+}
+
+/// Information abundance f_a (eq. 3) of a view over every foreground object in the frustum
+/// ([`FaFilter::FRUSTUM`]; see [`abundance_for`]).
 pub fn abundance(map: &ObjectMap, view: &View, p: &EvalParams) -> AbundanceTerms {
+    abundance_for(map, view, None, None, &FaFilter::FRUSTUM, p)
+}
+
+/// Information abundance f_a (eq. 3) of a view: the sum runs over the objects [`in_view`] for
+/// the target and walls given.
+pub fn abundance_for(
+    map: &ObjectMap,
+    view: &View,
+    target: Option<&Target>,
+    walls: Option<&Walls<'_>>,
+    fa: &FaFilter,
+    p: &EvalParams,
+) -> AbundanceTerms {
     let objs = map.objects();
     // Image boxes and depths of every foreground object in front of the camera.
     let mut boxes = [[0.0f32; 4]; MAX_OBJECTS];
@@ -124,7 +207,7 @@ pub fn abundance(map: &ObjectMap, view: &View, p: &EvalParams) -> AbundanceTerms
     let mut t = AbundanceTerms::default();
     for (i, o) in objs.iter().enumerate() {
         let c = Vec3::from(o.center);
-        if o.is_background() || !view.sees(&p.camera, c) {
+        if !in_view(map, i, view, target, walls, fa, p) {
             continue;
         }
         let h_sopm = if ab.h_sopm { o.h_sopm } else { 0.0 };
@@ -203,7 +286,8 @@ pub fn continuity(
     t
 }
 
-/// Evaluate one candidate camera pose: F(v) with every term, as a traced [`Candidate`].
+/// Evaluate one candidate camera pose: F(v) with every term, as a traced [`Candidate`], f_a
+/// over every object in the frustum ([`FaFilter::FRUSTUM`]; [`evaluate_view_in`] filters).
 pub fn evaluate_view(
     map: &ObjectMap,
     world_from_camera: &Affine3A,
@@ -211,9 +295,31 @@ pub fn evaluate_view(
     w: Weights,
     p: &EvalParams,
 ) -> Candidate {
+    evaluate_view_in(
+        map,
+        world_from_camera,
+        target,
+        None,
+        &FaFilter::FRUSTUM,
+        w,
+        p,
+    )
+}
+
+/// [`evaluate_view`] with f_a's sum filtered by `fa` (relevance, occlusion by the map's cuboids
+/// and `walls`).
+pub fn evaluate_view_in(
+    map: &ObjectMap,
+    world_from_camera: &Affine3A,
+    target: Option<&Target>,
+    walls: Option<&Walls<'_>>,
+    fa: &FaFilter,
+    w: Weights,
+    p: &EvalParams,
+) -> Candidate {
     let view = View::new(*world_from_camera);
     let a = if w.alpha != 0.0 {
-        abundance(map, &view, p)
+        abundance_for(map, &view, target, walls, fa, p)
     } else {
         AbundanceTerms::default()
     };
@@ -399,6 +505,70 @@ mod tests {
         // 1's box, so object 1 loses (1.9 / 5.9)² of its area under the paper's "all" rule.
         let expect = 1.0 - (1.9f32 / 5.9).powi(2);
         assert!((t.h_iou_mean - expect).abs() < 1e-4, "{t:?}");
+    }
+
+    /// Three objects in the frustum, each worth 0.5 (H_sopm only): A (cluster 0, 1.24 m away),
+    /// B (cluster 5, 3.1 m), C (cluster 0, 2.52 m); none hides another. "frustum" counts all three, "cluster" with
+    /// target 0 counts A and C (every object without a target), "radius" (1.5 m) only A.
+    #[test]
+    fn relevance_filter_hand_computed() {
+        let mut m = boxed_zeroed::<ObjectMap>();
+        fg(&mut m, 1, [1.2, 0.3, 0.0], [0.1, 0.1, 0.1]);
+        let b = fg(&mut m, 2, [3.0, -0.8, 0.0], [0.1, 0.1, 0.1]);
+        m.objects[b].cluster_id = 5;
+        fg(&mut m, 3, [2.5, -0.3, 0.0], [0.1, 0.1, 0.1]);
+        let mut p = params();
+        p.ablation.h_iou = false;
+        p.ablation.theta_sopm = false;
+        let v = View::new(level_view(0.0, 0.0));
+        let target = Target {
+            cluster_id: 0,
+            centroid: Vec3::new(2.0, 0.0, 0.0),
+        };
+        let mut fa = FaFilter::new(&PlannerConfig::default());
+        assert_eq!(fa.radius, 1.5);
+        let run = |rel, t: Option<&Target>, fa: &mut FaFilter| {
+            fa.relevance = rel;
+            let a = abundance_for(&m, &v, t, None, fa, &p);
+            (a.in_view, a.f_a)
+        };
+        assert_eq!(run(FaRelevance::Frustum, Some(&target), &mut fa), (3, 1.5));
+        assert_eq!(run(FaRelevance::Cluster, Some(&target), &mut fa), (2, 1.0));
+        assert_eq!(run(FaRelevance::Cluster, None, &mut fa), (3, 1.5));
+        assert_eq!(run(FaRelevance::Radius, Some(&target), &mut fa), (1, 0.5));
+        fa.radius = 2.6;
+        assert_eq!(run(FaRelevance::Radius, None, &mut fa), (2, 1.0));
+    }
+
+    /// A cup 3 m ahead with a background box (a wall of the map) between: out of view with
+    /// occlusion on, in view with it off or with the box moved behind the cup.
+    #[test]
+    fn hidden_objects_are_not_in_view() {
+        let mut m = boxed_zeroed::<ObjectMap>();
+        let cup = fg(&mut m, 1, [3.0, 0.0, 0.0], [0.1, 0.1, 0.12]);
+        let wall = fg(&mut m, 2, [2.0, 0.0, 0.0], [0.2, 1.0, 1.0]);
+        m.objects[wall].background = 1;
+        let p = params();
+        let mut fa = FaFilter::new(&PlannerConfig::default());
+        assert!(fa.occlusion);
+        fa.relevance = FaRelevance::Frustum; // the cup is 3 m away, beyond the default radius
+        let v = View::new(level_view(0.0, 0.0));
+        assert!(!in_view(&m, cup, &v, None, None, &fa, &p));
+        assert_eq!(abundance_for(&m, &v, None, None, &fa, &p).in_view, 0);
+        m.objects[wall].center = [4.0, 0.0, 0.0];
+        assert!(in_view(&m, cup, &v, None, None, &fa, &p));
+        m.objects[wall].center = [2.0, 0.0, 0.0];
+        fa.occlusion = false;
+        assert!(in_view(&m, cup, &v, None, None, &fa, &p));
+        assert_eq!(
+            abundance(&m, &v, &p).in_view,
+            1,
+            "the unfiltered sum counts it"
+        );
+        assert!(
+            !in_view(&m, wall, &v, None, None, &fa, &p),
+            "background never counts"
+        );
     }
 
     #[test]

@@ -1,11 +1,14 @@
 //! Global best view (paper section 3.2, Algorithm 1 lines 2–13).
 //!
 //! For the first unfinished cluster (by first sighting), `N` base poses are sampled evenly on a
-//! ring around it at radius `footprint radius + safe_distance`; each faces the cluster centre
-//! (neck yaw 0, the mount's pitch), so the camera's line of sight goes to the centre. Poses in
-//! collision or unreachable on the inflated navigation grid are dropped; the rest are evaluated
-//! in parallel (rayon, on whatever pool runs the job) with α = 1, β = 0.2 and the tracked
-//! cluster as the f_c target. Candidates within `revisit_radius` of one of the cluster's earlier
+//! ring around it at radius `footprint radius + safe_distance`; each faces the cluster centre.
+//! Poses in collision or unreachable on the inflated navigation grid are dropped; the rest are
+//! evaluated in parallel (rayon, on whatever pool runs the job) with α = 1, β = 0.2 and the
+//! tracked cluster as the f_c target. Each base pose is scored with the camera where it will
+//! be: at the neck yaw the LBV (α = 0, β = 1, its `M` neck candidates) chooses at that pose for
+//! the same cluster (`gbv.neck_aware`; off: neck 0, line of sight to the centre), so the view
+//! scored is the view taken; the chosen candidate's traced yaw is that camera's. f_a's in-view
+//! test treats the navigation grid's unexplained obstacles as walls ([`crate::planner::sight`]). Candidates within `revisit_radius` of one of the cluster's earlier
 //! GBV goals are dropped, so that every round moves the base to a view it has not had (without
 //! this, a view that keeps the highest F(v) is chosen again where the robot already stands, the
 //! goal is reached at once and the cluster's rounds run out within a fraction of a second). For a
@@ -19,8 +22,10 @@
 //! low-priority pool and poll for the [`GbvResult`], which hands the buffers back for reuse.
 
 use crate::planner::clusters::{ClusterInfo, unfinished_centroid};
-use crate::planner::evaluate::{EvalParams, Target, Weights, evaluate_view};
+use crate::planner::evaluate::{EvalParams, FaFilter, Target, Weights, evaluate_view_in};
+use crate::planner::lbv::{Lbv, neck_yaws};
 use crate::planner::reach::NavParams;
+use crate::planner::sight::Walls;
 use rayon::prelude::*;
 use shm_types::{
     Candidate, MAX_CANDIDATES, ObjectMap, OccupancyGrid, PlannerDecision, boxed_zeroed,
@@ -45,6 +50,42 @@ pub struct GbvParams {
     pub revisit_radius: f32,
     /// Angular sectors around a cluster (`bootstrap.sectors`).
     pub sectors: usize,
+    /// How the neck yaw of a candidate is chosen.
+    pub neck: GbvNeck,
+    /// Which objects f_a counts.
+    pub fa: FaFilter,
+}
+
+/// The neck yaw a GBV candidate is scored at: the LBV's choice (its candidates and weights).
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct GbvNeck {
+    /// Use the LBV's choice; false: neck 0.
+    pub aware: bool,
+    /// LBV neck candidates M.
+    pub candidates: usize,
+    /// Neck range, radians.
+    pub min: f32,
+    /// Neck range, radians.
+    pub max: f32,
+    /// The LBV's α, β.
+    pub weights: Weights,
+}
+
+impl GbvNeck {
+    /// From the `[planner]` configuration (`gbv.neck_aware`, `[planner.lbv]`).
+    pub fn new(cfg: &crate::planner::config::PlannerConfig) -> Self {
+        let l = &cfg.lbv;
+        Self {
+            aware: cfg.gbv.neck_aware,
+            candidates: l.candidates,
+            min: l.neck_min_deg.to_radians(),
+            max: l.neck_max_deg.to_radians(),
+            weights: Weights {
+                alpha: l.alpha,
+                beta: l.beta,
+            },
+        }
+    }
 }
 
 impl GbvParams {
@@ -64,6 +105,8 @@ impl GbvParams {
             nav: NavParams::new(cfg),
             revisit_radius: cfg.gbv.revisit_radius,
             sectors: cfg.bootstrap.sectors,
+            neck: GbvNeck::new(cfg),
+            fa: FaFilter::new(cfg),
         }
     }
 }
@@ -88,21 +131,65 @@ pub fn ring_poses(
         .collect()
 }
 
-/// Evaluate base poses (neck 0, mount pitch) in parallel on the current rayon pool.
+/// Evaluate base poses in parallel on the current rayon pool, without walls (see
+/// [`evaluate_poses_in`]).
 pub fn evaluate_poses(
     map: &ObjectMap,
     poses: &[[f32; 3]],
     target: Option<&Target>,
     p: &GbvParams,
 ) -> Vec<Candidate> {
+    evaluate_poses_in(map, poses, target, None, p).0
+}
+
+/// The neck yaw the LBV chooses at base pose `b` for `target` (ties: nearest to neck 0); 0 when
+/// neck-awareness is off or there is no target.
+pub fn neck_for(lbv: &mut Lbv, map: &ObjectMap, b: [f32; 3], target: Option<&Target>) -> f32 {
+    target
+        .and_then(|t| lbv.evaluate(map, b, 0.0, Some(t)))
+        .map_or(0.0, |c| c.neck_yaw)
+}
+
+/// Evaluate base poses in parallel on the current rayon pool, each at the neck yaw the LBV
+/// would choose there ([`GbvNeck`]; mount pitch), with `walls` as extra occluders. Returns the
+/// candidates and their neck yaws.
+pub fn evaluate_poses_in(
+    map: &ObjectMap,
+    poses: &[[f32; 3]],
+    target: Option<&Target>,
+    walls: Option<&Walls<'_>>,
+    p: &GbvParams,
+) -> (Vec<Candidate>, Vec<f32>) {
     let pitch = p.eval.mount.pitch();
+    let n = p.neck;
+    let aware = n.aware && target.is_some();
+    let lbv = Lbv::with(
+        p.eval,
+        n.weights,
+        if aware {
+            neck_yaws(n.min, n.max, n.candidates)
+        } else {
+            Vec::new()
+        },
+    );
     poses
         .par_iter()
-        .map(|b| {
-            let pose = p.eval.mount.camera_pose(*b, 0.0, pitch);
-            evaluate_view(map, &pose, target, p.weights, &p.eval)
-        })
-        .collect()
+        .map_init(
+            || lbv.clone(),
+            |lbv, b| {
+                let yaw = if aware {
+                    neck_for(lbv, map, *b, target)
+                } else {
+                    0.0
+                };
+                let pose = p.eval.mount.camera_pose(*b, yaw, pitch);
+                (
+                    evaluate_view_in(map, &pose, target, walls, &p.fa, p.weights, &p.eval),
+                    yaw,
+                )
+            },
+        )
+        .unzip()
 }
 
 /// The chosen global best view.
@@ -116,6 +203,14 @@ pub struct GbvChoice {
     pub cluster_id: i32,
     /// The evaluated candidate.
     pub candidate: Candidate,
+}
+
+impl GbvChoice {
+    /// The neck yaw (relative to the base) the view was scored at: the traced camera yaw minus
+    /// the base yaw.
+    pub fn neck_yaw(&self) -> f32 {
+        crate::geom::wrap_angle(self.candidate.yaw - self.pose[2])
+    }
 }
 
 /// One GBV round as an owned job.
@@ -155,6 +250,15 @@ impl GbvJob {
     pub fn run(self) -> GbvResult {
         let p = self.params;
         let nav = p.nav.flooded(&self.nav, [self.base[0], self.base[1]]);
+        let walls = Walls {
+            grid: &self.nav,
+            inflation: if p.nav.inflated {
+                p.nav.robot_radius
+            } else {
+                0.0
+            },
+            slack: p.fa.wall_slack,
+        };
         let r2 = p.revisit_radius * p.revisit_radius;
         let mut decision = boxed_zeroed::<PlannerDecision>();
         decision.kind = decision_kind::GBV;
@@ -195,7 +299,7 @@ impl GbvJob {
                 cluster_id: info.id,
                 centroid: unfinished_centroid(&self.map, info, p.eval.eps_sopm),
             };
-            let cands = evaluate_poses(&self.map, &ok, Some(&target), &p);
+            let (cands, _) = evaluate_poses_in(&self.map, &ok, Some(&target), Some(&walls), &p);
             let Some(k) = argmax(&cands) else {
                 continue;
             };
@@ -265,4 +369,102 @@ fn fill_decision(
     }
     d.count = n as u32;
     d.evaluated = cands.len() as u32;
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::config::CameraConfig;
+    use crate::planner::clusters::cluster_info;
+    use crate::planner::config::PlannerConfig;
+    use glam::Vec3;
+
+    /// A 4 m long table (cluster 7) with one unfinished cup at its east end, (1.9, 0, 0.8).
+    fn long_table() -> Box<ObjectMap> {
+        let mut m = boxed_zeroed::<ObjectMap>();
+        m.count = 2;
+        let t = &mut m.objects[0];
+        t.id = 7;
+        t.background = 1;
+        t.cluster_id = 7;
+        t.center = [0.0, 0.0, 0.375];
+        t.size = [4.0, 0.8, 0.75];
+        let c = &mut m.objects[1];
+        c.id = 8;
+        c.cluster_id = 7;
+        c.center = [1.9, 0.0, 0.8];
+        c.size = [0.1, 0.1, 0.1];
+        c.h_sopm = 0.9;
+        c.c_asso = 1.0;
+        m
+    }
+
+    /// From the ring pose south of the table's middle, facing its centre, the cup lies 35.7° to
+    /// the right: outside the 60° field of view at neck 0. The LBV there turns the neck to the
+    /// candidate nearest the cup (−40°, candidates every 20°); the neck-aware GBV scores the pose
+    /// at that yaw, so the cup is in view and f_a counts it, and the traced camera yaw is base
+    /// yaw + neck yaw. At neck 0 the same pose sees nothing.
+    #[test]
+    fn neck_aware_gbv_scores_the_yaw_that_sees_the_cluster() {
+        let cfg = PlannerConfig::default();
+        let mut p = GbvParams::new(&cfg, &CameraConfig::default());
+        assert!(p.neck.aware);
+        // The cup is 3.3 m from the ring: count the target cluster's objects.
+        p.fa.relevance = crate::planner::config::FaRelevance::Cluster;
+        let m = long_table();
+        let info = cluster_info(&m, 7, cfg.eps_sopm).unwrap();
+        let target = Target {
+            cluster_id: 7,
+            centroid: unfinished_centroid(&m, &info, cfg.eps_sopm),
+        };
+        let ring = ring_poses(&info, 36, p.safe_distance, [0.0, -5.0]);
+        let south = ring[0];
+        assert!(south[0].abs() < 1e-4 && south[1] < -2.0, "{south:?}");
+        let (c, necks) = evaluate_poses_in(&m, &[south], Some(&target), None, &p);
+        assert!(
+            (necks[0] + 40f32.to_radians()).abs() < 1e-4,
+            "neck {}°",
+            necks[0].to_degrees()
+        );
+        assert_eq!(c[0].objects_in_view, 1, "{:?}", c[0]);
+        assert!(c[0].f_a > 0.5);
+        let expect = crate::geom::wrap_angle(south[2] + necks[0]);
+        assert!((c[0].yaw - expect).abs() < 1e-4, "{} vs {expect}", c[0].yaw);
+        let mut blind = p;
+        blind.neck.aware = false;
+        let (c0, n0) = evaluate_poses_in(&m, &[south], Some(&target), None, &blind);
+        assert_eq!((n0[0], c0[0].objects_in_view, c0[0].f_a), (0.0, 0, 0.0));
+
+        // The whole round: the chosen goal carries the neck yaw the LBV takes there, and the
+        // traced chosen candidate is the camera at that yaw.
+        let job = GbvJob {
+            map: m,
+            nav: boxed_zeroed::<OccupancyGrid>(),
+            base: [0.0, -5.0, 0.0],
+            clusters: vec![info],
+            visited: Vec::new(),
+            params: p,
+        };
+        let r = job.run();
+        let b = r.best.expect("a reachable candidate");
+        let mut lbv = Lbv::new(&cfg, &CameraConfig::default());
+        let taken = neck_for(&mut lbv, &r.map, b.pose, Some(&target));
+        assert!(
+            (b.neck_yaw() - taken).abs() < 1e-4,
+            "{} vs {taken}",
+            b.neck_yaw()
+        );
+        assert!(b.candidate.objects_in_view >= 1);
+        let chosen = r.decision.candidates[..r.decision.count as usize]
+            .iter()
+            .find(|c| c.chosen == 1)
+            .unwrap();
+        let yaw = crate::geom::wrap_angle(b.pose[2] + taken);
+        assert!((chosen.yaw - yaw).abs() < 1e-4);
+        let cam = p
+            .eval
+            .mount
+            .camera_pose(b.pose, taken, p.eval.mount.pitch());
+        assert!(Vec3::from(cam.translation).distance(Vec3::from(chosen.position)) < 1e-4);
+    }
 }

@@ -16,8 +16,8 @@ use crate::config::CameraConfig;
 use crate::geom::wrap_angle;
 use crate::planner::config::PlannerConfig;
 use crate::planner::evaluate::{
-    AbundanceTerms, ContinuityTerms, EvalParams, Target, Weights, abundance, candidate,
-    continuity_from_offsets, covisible_offsets, evaluate_view,
+    AbundanceTerms, ContinuityTerms, EvalParams, FaFilter, Target, Weights, abundance_for,
+    candidate, continuity_from_offsets, covisible_offsets, evaluate_view,
 };
 use crate::planner::terms::View;
 use glam::Vec3;
@@ -60,6 +60,7 @@ pub fn neck_yaws(min: f32, max: f32, m: usize) -> Vec<f32> {
 #[derive(Debug, Clone)]
 pub struct Lbv {
     params: EvalParams,
+    fa: FaFilter,
     weights: Weights,
     yaws: Vec<f32>,
     cands: Vec<Candidate>,
@@ -70,7 +71,7 @@ impl Lbv {
     /// From the configuration (`[planner.lbv]`).
     pub fn new(planner: &PlannerConfig, camera: &CameraConfig) -> Self {
         let l = &planner.lbv;
-        Self::with(
+        let mut lbv = Self::with(
             EvalParams::new(planner, camera),
             Weights {
                 alpha: l.alpha,
@@ -81,14 +82,18 @@ impl Lbv {
                 l.neck_max_deg.to_radians(),
                 l.candidates,
             ),
-        )
+        );
+        lbv.fa = FaFilter::new(planner);
+        lbv
     }
 
-    /// With explicit parameters and candidate neck yaws.
+    /// With explicit parameters and candidate neck yaws (f_a, if α > 0, over every object in
+    /// the frustum).
     pub fn with(params: EvalParams, weights: Weights, yaws: Vec<f32>) -> Self {
         let cands = Vec::with_capacity(yaws.len());
         Self {
             params,
+            fa: FaFilter::FRUSTUM,
             weights,
             yaws,
             cands,
@@ -134,7 +139,7 @@ impl Lbv {
                 continue;
             }
             let a = if w.alpha != 0.0 {
-                abundance(map, &view, &self.params)
+                abundance_for(map, &view, target, None, &self.fa, &self.params)
             } else {
                 AbundanceTerms::default()
             };

@@ -10,6 +10,7 @@
 //! |---|---|
 //! | [`terms`] | each term of F(v): H_IoU, cos θ_sopm, co-visibility, N_cp, cos θ_c, f_a, f_c |
 //! | [`evaluate`] | F(v) of one camera pose over a map snapshot, as a traced `Candidate` |
+//! | [`sight`] | occlusion in f_a's in-view test: ray casts against map cuboids and grid walls |
 //! | [`clusters`] | clusters by first sighting, completion rule, sides-seen tracker |
 //! | [`giveup`] | the stall rule: objects whose entropy stops falling are given up |
 //! | [`gbv`] | global candidates on a ring, [`GbvJob`] (owned, parallel) |
@@ -71,16 +72,18 @@ pub mod giveup;
 pub mod lbv;
 pub mod reach;
 pub mod session;
+pub mod sight;
 pub mod synth;
 pub mod terms;
 pub mod vpsom;
 
 pub use baselines::{CoveragePlanner, FrontierPlanner};
 pub use config::{
-    AblationConfig, BootstrapConfig, CoverageConfig, FrontierConfig, GbvConfig, GiveUpConfig,
+    AblationConfig, BootstrapConfig, CoverageConfig, FaRelevance, FrontierConfig, GbvConfig,
+    GiveUpConfig,
     LbvConfig, Occluders, PlannerConfig, PlannerKind, UnknownPlanner, UnknownTerm,
 };
-pub use evaluate::{EvalParams, Target, Weights, evaluate_view};
+pub use evaluate::{EvalParams, FaFilter, Target, Weights, evaluate_view, evaluate_view_in};
 pub use gbv::{GbvJob, GbvResult};
 pub use giveup::{GiveUpCause, GivenUpObject};
 pub use lbv::Lbv;
