@@ -169,6 +169,8 @@ fn near(a: [u16; 4], b: [u16; 4], px: u16) -> bool {
 
 #[test]
 fn two_books_side_by_side_in_one_merged_box_stay_two_objects() {
+    // Guard (not a reproduction): this renderer has no mixed pixels, so the two books stay apart
+    // even without the split; the bench (paper scene 1) still merges them, see the report.
     // Two books 5 cm apart on a table (as paper scene 1's), seen from all around at 1.6 m. A
     // YOLO-class detector's NMS turns their two boxes into one when they overlap; here, harsher,
     // whenever they touch (within 3 px): from every view along the pair's axis, a box holding
