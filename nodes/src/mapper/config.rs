@@ -53,6 +53,10 @@ pub struct MapperConfig {
     pub merge_margin: f32,
     /// Detections scoring below this are ignored.
     pub min_score: f32,
+    /// Duplicate merge across classes (`[mapper.extensions] cross_class`): cuboid IoU ≥ this.
+    pub cross_merge_iou: f32,
+    /// Sparse fallback (`[mapper.extensions] sparse_fallback`).
+    pub sparse: SparseConfig,
     /// Association.
     pub association: AssociationConfig,
     /// Switches of the additions beyond the paper.
@@ -133,6 +137,24 @@ pub struct ExtensionsConfig {
     /// Publish a foreground object only while it rests on a mapped supporting plane (it has a
     /// cluster): detections on walls, on table fronts and seen through glass float in the air.
     pub require_support: bool,
+    /// Existence misses weighted by how detectable the object was in the frame (its visible
+    /// projected size through the detector's recall-vs-size curve, truncation, occlusion), and
+    /// objects hit from many viewpoints protected by a higher log-odds cap
+    /// ([`ExistenceConfig::recall_area_px`], [`ExistenceConfig::confirmed_hits`]).
+    pub detectability: bool,
+    /// Box segmentation: a chosen depth cluster much longer than its class prior, with an empty
+    /// gap across its long axis, is split there and the part that fits the box is kept
+    /// (two same-class neighbours in one box, as after NMS): `[mapper.segmentation] split_factor`.
+    pub split_oversize: bool,
+    /// A confident box-only detection of a foreground object with fewer than `min_points`
+    /// points (glass, dark or shiny surfaces, far small objects) is still used when its few points
+    /// sit on a mapped table top and fit the class prior (`[mapper.sparse]`).
+    pub sparse_fallback: bool,
+    /// Label confusion beyond the look-alike groups: a detection of any foreground class whose
+    /// box overlaps an object's projected box (`[mapper.existence] cross_class_iou`) means the
+    /// object was seen (under another label), not missed; foreground objects of any classes
+    /// whose cuboids overlap with IoU ≥ `[mapper] cross_merge_iou` are one object (class by vote).
+    pub cross_class: bool,
 }
 
 impl Default for ExtensionsConfig {
@@ -174,6 +196,40 @@ pub struct ExistenceConfig {
     /// A missed object overlapped (box IoU) this much by a detection of a compatible class that
     /// was not associated with it is not counted as missed.
     pub overlap_iou: f32,
+    /// Detectability (`[mapper.extensions] detectability`): visible projected box areas
+    /// (pixels at 640 × 480, ascending) at which the detector's recall is `recall`; linear in
+    /// log area between them, clamped outside.
+    pub recall_area_px: Vec<f32>,
+    /// ... the detector's recall at those areas (the mapper's model of its own detector).
+    pub recall: Vec<f32>,
+    /// An object hit (detected and associated) from this many viewpoints is confirmed ...
+    pub confirmed_hits: u32,
+    /// ... and its log-odds are clamped to this instead of `max_log_odds`.
+    pub confirmed_max_log_odds: f32,
+    /// With `[mapper.extensions] cross_class`: a detection of any foreground class whose box
+    /// overlaps the object's projected box this much (IoU) is not a miss.
+    pub cross_class_iou: f32,
+}
+
+/// `[mapper.sparse]` section: confident detections with few points.
+#[derive(Debug, Clone, Copy, PartialEq, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct SparseConfig {
+    /// Fewest points still used.
+    pub min_points: u32,
+    /// Lowest detector score.
+    pub min_score: f32,
+    /// The points' bottom lies at most this far above a mapped support plane under them, m.
+    pub max_above_support: f32,
+    /// The points' extent fits the class size prior at least this well ([`super::priors`]).
+    pub min_prior_fit: f32,
+}
+
+impl Default for SparseConfig {
+    /// The `[mapper.sparse]` section of the built-in `config/default.toml`.
+    fn default() -> Self {
+        runtime::config::DEFAULTS.section("mapper.sparse")
+    }
 }
 
 impl Default for ExistenceConfig {
@@ -198,6 +254,14 @@ pub struct SegmentationConfig {
     /// Points farther from the cluster's median (horizontally) than this multiple of the class
     /// prior's half diagonal are outliers.
     pub outlier_factor: f32,
+    /// A cluster longer (horizontally, along its principal axis) than this multiple of its
+    /// class prior's long side is split at an empty gap (`[mapper.extensions] split_oversize`).
+    pub split_factor: f32,
+    /// ... the gap: at least this long (m) without points across the long axis.
+    pub split_gap: f32,
+    /// Set from `[mapper.extensions] split_oversize` (not a key of this table).
+    #[serde(skip)]
+    pub split: bool,
 }
 
 impl Default for SegmentationConfig {
@@ -333,6 +397,38 @@ impl MapperConfig {
             1.0,
         )?;
         c.in_range("mapper.min_score", self.min_score.into(), 0.0, 1.0)?;
+        c.in_range(
+            "mapper.cross_merge_iou",
+            self.cross_merge_iou.into(),
+            0.01,
+            1.0,
+        )?;
+        let sp = &self.sparse;
+        c.count(
+            "mapper.sparse.min_points",
+            sp.min_points as usize,
+            3,
+            100_000,
+        )?;
+        c.in_range("mapper.sparse.min_score", sp.min_score.into(), 0.0, 1.0)?;
+        c.in_range(
+            "mapper.sparse.max_above_support",
+            sp.max_above_support.into(),
+            0.0,
+            1.0,
+        )?;
+        c.in_range(
+            "mapper.sparse.min_prior_fit",
+            sp.min_prior_fit.into(),
+            0.0,
+            1.0,
+        )?;
+        c.in_range(
+            "mapper.existence.cross_class_iou",
+            self.existence.cross_class_iou.into(),
+            0.01,
+            1.0,
+        )?;
         let e = &self.existence;
         c.require(
             e.p_detect > e.p_false && e.p_detect < 1.0,
@@ -384,6 +480,33 @@ impl MapperConfig {
             0.0,
             1.0,
         )?;
+        c.require(
+            e.recall_area_px.len() == e.recall.len()
+                && !e.recall.is_empty()
+                && e.recall_area_px.windows(2).all(|w| w[1] > w[0])
+                && e.recall_area_px.first().is_some_and(|a| *a > 0.0),
+            "mapper.existence.recall_area_px",
+            format!("{:?}", e.recall_area_px),
+            "must be ascending areas > 0, one per `recall` value",
+        )?;
+        c.require(
+            e.recall.iter().all(|r| (0.0..1.0).contains(r)),
+            "mapper.existence.recall",
+            format!("{:?}", e.recall),
+            "must be probabilities in [0, 1)",
+        )?;
+        c.require(
+            e.confirmed_max_log_odds >= e.max_log_odds && e.confirmed_max_log_odds <= 50.0,
+            "mapper.existence.confirmed_max_log_odds",
+            e.confirmed_max_log_odds,
+            "must be in [max_log_odds, 50]",
+        )?;
+        c.count(
+            "mapper.existence.confirmed_hits",
+            e.confirmed_hits as usize,
+            1,
+            100_000,
+        )?;
         let g = &self.segmentation;
         c.in_range(
             "mapper.segmentation.plane_bin",
@@ -414,6 +537,18 @@ impl MapperConfig {
             g.outlier_factor.into(),
             0.5,
             100.0,
+        )?;
+        c.in_range(
+            "mapper.segmentation.split_factor",
+            g.split_factor.into(),
+            1.0,
+            100.0,
+        )?;
+        c.in_range(
+            "mapper.segmentation.split_gap",
+            g.split_gap.into(),
+            0.005,
+            1.0,
         )?;
         let a = &self.association;
         for (k, group) in a.lookalike.iter().enumerate() {

@@ -13,7 +13,17 @@
 //!   or in front of the object's surface, so the frame seeing the object or what is behind it
 //!   counts as visible). It is not counted missed when a detection of a compatible class that
 //!   went elsewhere (or was refused) overlaps its projected box (IoU ≥ `overlap_iou`): nearby
-//!   objects merged into one box, a jittered box failing the test.
+//!   objects merged into one box, a jittered box failing the test. With `[mapper.extensions]
+//!   cross_class`, a detection of any foreground class overlapping it by `cross_class_iou` also
+//!   explains the miss (a label confusion outside the look-alike groups).
+//!
+//! **Detectability** (`[mapper.extensions] detectability`, beyond the above): a miss weighs
+//! `ln((1 − p) / (1 − p_false))` with `p` the detector's expected recall for the object in this
+//! frame — the mapper's own model of its detector ([`recall_at`]: recall against the visible
+//! projected box area, i.e. the in-frame area × the unoccluded fraction, from published COCO
+//! figures) — so a small, truncated or half-hidden object that the detector often
+//! misses loses little, and an object hit from `confirmed_hits` viewpoints is clamped at
+//! `confirmed_max_log_odds` instead of `max_log_odds` (a few misses do not undo many hits).
 //!
 //! A detector's misses are not independent between nearby views (10 Hz frames of one scene, a
 //! persistent per-direction failure), so evidence is taken once per viewpoint: an object's `l`
@@ -25,7 +35,7 @@ use super::Mapper;
 use super::cuboid::Box3;
 use crate::geom::{Camera, Cuboid};
 use glam::{Affine3A, Mat3, Vec3};
-use shm_types::{DepthFrame, Detection};
+use shm_types::{DepthFrame, Detection, is_background_class};
 
 /// Intersection over union of two pixel boxes `[x0, y0, x1, y1]`.
 fn box_iou(a: [f32; 4], b: [f32; 4]) -> f32 {
@@ -35,6 +45,31 @@ fn box_iou(a: [f32; 4], b: [f32; 4]) -> f32 {
     let area = |r: [f32; 4]| (r[2] - r[0]).max(0.0) * (r[3] - r[1]).max(0.0);
     let union = area(a) + area(b) - inter;
     if union > 0.0 { inter / union } else { 0.0 }
+}
+
+/// How much of an object a frame should have shown.
+#[derive(Debug, Clone, Copy, PartialEq)]
+struct Seen {
+    /// Projected box area inside the image times the unoccluded fraction, pixels.
+    visible_px: f32,
+}
+
+/// The detector's recall for an object of visible box area `area_px` (pixels at 640 × 480):
+/// piecewise linear in log area through `(areas[i], recall[i])`, clamped outside.
+pub fn recall_at(areas: &[f32], recall: &[f32], area_px: f32) -> f32 {
+    let (Some(&a0), Some(&r0)) = (areas.first(), recall.first()) else {
+        return 0.0;
+    };
+    if area_px <= a0 {
+        return r0;
+    }
+    for (a, r) in areas.windows(2).zip(recall.windows(2)) {
+        if area_px <= a[1] {
+            let t = (area_px / a[0]).ln() / (a[1] / a[0]).ln();
+            return r[0] + t * (r[1] - r[0]);
+        }
+    }
+    recall.last().copied().unwrap_or(0.0)
 }
 
 /// Sample grid per visible face.
@@ -102,8 +137,8 @@ impl Mapper {
         dets: &[Detection],
     ) -> u32 {
         let e = self.cfg.existence.clone();
+        let detectability = self.cfg.extensions.detectability;
         let hit = (e.p_detect / e.p_false).ln();
-        let miss = ((1.0 - e.p_detect) / (1.0 - e.p_false)).ln();
         let cam_from_world = pose.inverse();
         let scale = (camera.width * camera.height) as f32 / (640.0 * 480.0);
         let min_px = e.min_box_px * scale;
@@ -115,7 +150,7 @@ impl Mapper {
             let o = &self.objects[k];
             let delta = if o.hit {
                 hit
-            } else if self.should_see(
+            } else if let Some(v) = self.should_see(
                 o.class_id,
                 &o.cuboid,
                 frame,
@@ -124,12 +159,17 @@ impl Mapper {
                 dets,
                 min_px,
             ) {
-                miss
+                let p = if detectability {
+                    recall_at(&e.recall_area_px, &e.recall, v.visible_px / scale)
+                } else {
+                    e.p_detect
+                };
+                ((1.0 - p) / (1.0 - e.p_false)).ln().min(0.0)
             } else {
                 0.0
             };
             let o = &mut self.objects[k];
-            o.hit = false;
+            let was_hit = std::mem::take(&mut o.hit);
             let new_view = o.last_view.is_none_or(|p| {
                 let (a, b) = (p - o.cuboid.center, cam_pos - o.cuboid.center);
                 p.distance(cam_pos) >= e.min_view_change
@@ -137,7 +177,13 @@ impl Mapper {
             });
             if delta != 0.0 && new_view {
                 o.last_view = Some(cam_pos);
-                o.existence = (o.existence + delta).clamp(-e.max_log_odds, e.max_log_odds);
+                o.hit_views += was_hit as u32;
+                let cap = if detectability && o.hit_views >= e.confirmed_hits {
+                    e.confirmed_max_log_odds
+                } else {
+                    e.max_log_odds
+                };
+                o.existence = (o.existence + delta).clamp(-cap, cap);
             }
             if o.existence < e.delete_below {
                 self.objects.remove(k);
@@ -150,7 +196,7 @@ impl Mapper {
     }
 
     /// Whether an object with cuboid `b` should have been detected in this frame and no
-    /// overlapping compatible detection explains the miss.
+    /// overlapping compatible detection explains the miss; if so, how much of it was visible.
     #[allow(clippy::too_many_arguments)]
     fn should_see(
         &self,
@@ -161,11 +207,11 @@ impl Mapper {
         cam_from_world: &Affine3A,
         dets: &[Detection],
         min_px: f32,
-    ) -> bool {
+    ) -> Option<Seen> {
         let e = &self.cfg.existence;
         let centre = cam_from_world.transform_point3(b.center);
         if centre.z < camera.k.min_range || centre.length() > e.max_range {
-            return false;
+            return None;
         }
         // Projected box: every corner must be in front of the camera.
         let cub = Cuboid {
@@ -182,11 +228,9 @@ impl Mapper {
         for c in cub.corners() {
             let pc = cam_from_world.transform_point3(c);
             if pc.z < camera.k.min_range * 0.5 {
-                return false;
+                return None;
             }
-            let Some(px) = camera.project(pc) else {
-                return false;
-            };
+            let px = camera.project(pc)?;
             raw = [
                 raw[0].min(px.x),
                 raw[1].min(px.y),
@@ -204,16 +248,18 @@ impl Mapper {
         let area = |r: [f32; 4]| (r[2] - r[0]).max(0.0) * (r[3] - r[1]).max(0.0);
         let (full, inside) = (area(raw), area(clipped));
         if full <= 0.0 || inside < e.min_in_frame * full || inside < min_px {
-            return false;
+            return None;
         }
+        let cross = self.cfg.extensions.cross_class;
         if dets.iter().any(|d| {
-            self.groups.compatible(d.class_id, class_id)
-                && box_iou(d.bbox.map(f32::from), clipped) >= e.overlap_iou
+            let iou = box_iou(d.bbox.map(f32::from), clipped);
+            (self.groups.compatible(d.class_id, class_id) && iou >= e.overlap_iou)
+                || (cross && !is_background_class(d.class_id) && iou >= e.cross_class_iou)
         }) {
-            return false;
+            return None;
         }
         let cam_pos: Vec3 = cam_from_world.inverse().translation.into();
-        unoccluded_fraction(
+        let f = unoccluded_fraction(
             b,
             frame,
             camera,
@@ -221,7 +267,10 @@ impl Mapper {
             cam_pos,
             e.occlusion_tolerance,
         )
-        .is_some_and(|f| f >= e.min_visible)
+        .filter(|f| *f >= e.min_visible)?;
+        Some(Seen {
+            visible_px: inside * f,
+        })
     }
 }
 
@@ -233,5 +282,23 @@ mod tests {
     fn box_iou_of_overlapping_boxes() {
         assert!((box_iou([0.0, 0.0, 2.0, 2.0], [1.0, 0.0, 3.0, 2.0]) - 1.0 / 3.0).abs() < 1e-6);
         assert_eq!(box_iou([0.0, 0.0, 1.0, 1.0], [2.0, 2.0, 3.0, 3.0]), 0.0);
+    }
+
+    #[test]
+    fn recall_grows_with_the_visible_area() {
+        let (a, r) = ([64.0, 256.0, 3072.0, 36864.0], [0.10, 0.39, 0.64, 0.72]);
+        assert_eq!(recall_at(&a, &r, 10.0), 0.10);
+        assert!((recall_at(&a, &r, 256.0) - 0.39).abs() < 1e-6);
+        assert!(
+            (recall_at(&a, &r, 128.0) - 0.245).abs() < 1e-3,
+            "half-way in log area"
+        );
+        assert_eq!(recall_at(&a, &r, 1e6), 0.72);
+        let mut last = 0.0;
+        for k in 0..40 {
+            let p = recall_at(&a, &r, 2f32.powf(k as f32 * 0.5));
+            assert!(p >= last);
+            last = p;
+        }
     }
 }

@@ -1,6 +1,9 @@
 //! Duplicate merging (an addition beyond the paper, `[mapper.extensions] duplicate_merge`):
 //! after each frame, two objects that are one object seen twice (compatible classes, strongly
-//! overlapping cuboids) are merged into the older one.
+//! overlapping cuboids) are merged into the older one. With `[mapper.extensions] cross_class`,
+//! foreground objects of incompatible classes whose cuboids overlap with IoU ≥
+//! `[mapper] cross_merge_iou` are one object labelled two ways and are merged too (the class is
+//! the score vote of both).
 
 use super::points::rest_on_support;
 use super::{Mapper, cuboid};
@@ -30,7 +33,12 @@ impl Mapper {
             (ca.footprint_intersection(cb), area(ca), area(cb))
         } else {
             if !self.groups.compatible(a.class_id, b.class_id) {
-                return false;
+                // One object labelled two ways (a confusion outside the look-alike groups).
+                let inter = ca.intersection_volume(cb);
+                let union = ca.volume() + cb.volume() - inter;
+                return self.cfg.extensions.cross_class
+                    && union > 0.0
+                    && inter / union >= self.cfg.cross_merge_iou;
             }
             (ca.intersection_volume(cb), ca.volume(), cb.volume())
         };

@@ -15,6 +15,7 @@
 //! | [`sopm`] | surface occupancy probability maps |
 //! | [`existence`] | existence log-odds: spurious objects are deleted |
 //! | `merge.rs` | duplicate merging |
+//! | `sparse.rs` | confident detections with few points (glass, far small objects) |
 //! | `publish.rs` | [`Mapper::write_map`], [`Mapper::write_grid`] |
 //! | [`grid`] | the exploration occupancy grid |
 //! | `mod.rs` | [`Mapper`]: the per-frame pipeline |
@@ -58,6 +59,7 @@ pub mod priors;
 mod publish;
 pub mod segment;
 pub mod sopm;
+mod sparse;
 pub mod wilcoxon;
 
 use crate::geom::{Camera, pose_to_affine};
@@ -75,7 +77,7 @@ use wilcoxon::RankScratch;
 
 pub use config::{
     AssociationConfig, CAssoMode, ExistenceConfig, ExtensionsConfig, MapperConfig,
-    SegmentationConfig, SopmConfig,
+    SegmentationConfig, SopmConfig, SparseConfig,
 };
 
 /// Why a frame was refused.
@@ -365,7 +367,10 @@ impl Mapper {
                 .cfg
                 .extensions
                 .box_segmentation
-                .then_some(self.cfg.segmentation),
+                .then_some(SegmentationConfig {
+                    split: self.cfg.extensions.split_oversize,
+                    ..self.cfg.segmentation
+                }),
         };
         let a = self.cfg.association.clone();
         let cam_from_world = pose.inverse();
@@ -387,7 +392,9 @@ impl Mapper {
                 &mut pts,
             );
             self.det_points[i] = pts;
-            if n < self.cfg.min_points as usize {
+            if n < self.cfg.min_points as usize
+                && !(extract.boxes && fg && self.sparse_ok(det, &self.det_points[i]))
+            {
                 continue;
             }
             stats.used += 1;

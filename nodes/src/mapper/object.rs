@@ -81,6 +81,8 @@ pub struct MappedObject {
     pub hit: bool,
     /// Camera position of the newest existence update.
     pub last_view: Option<Vec3>,
+    /// Viewpoints whose existence update was a hit ([`super::existence`]).
+    pub hit_views: u32,
 }
 
 impl MappedObject {
@@ -120,6 +122,7 @@ impl MappedObject {
             existence: 0.0,
             hit: false,
             last_view: None,
+            hit_views: 0,
         }
     }
 
@@ -211,6 +214,7 @@ impl MappedObject {
             self.asso = other.asso;
         }
         self.existence = self.existence.max(other.existence);
+        self.hit_views = self.hit_views.max(other.hit_views);
         self.hit |= other.hit;
         if self.support_height.is_none() {
             self.support_height = other.support_height;

@@ -208,7 +208,16 @@ impl PointScratch {
             (Some(seg), true) => {
                 let prior = super::priors::size_prior(det.class_id);
                 let geo = super::segment::Grid { gw, gh };
-                self.segment_box(geo, &prior, foreground, seg, params.gap_min, gap_per_m, out);
+                self.segment_box(
+                    geo,
+                    &prior,
+                    foreground,
+                    seg,
+                    params.gap_min,
+                    gap_per_m,
+                    spacing,
+                    out,
+                );
             }
             _ => self.largest_component(gw, gh, params.gap_min, gap_per_m, out),
         }

@@ -15,7 +15,12 @@
 //!    how central it is (a box is centred on its object's visible part, in both axes), how near (an object occludes what is behind it), its share of the
 //!    points and how well its 3D extent fits the class size prior ([`super::priors`]); the best
 //!    one is the object.
-//! 4. **outliers** — points farther horizontally from the cluster's median than
+//! 4. **split** (`[mapper.extensions] split_oversize`) — a chosen cluster longer along its
+//!    horizontal principal axis than `split_factor` × the prior's long side, with a band of
+//!    `split_gap` (and 2.5 sample spacings) across that axis holding under a quarter of the mean
+//!    density (mixed pixels only) and ≥ 15 % of its points on each side, is two objects (same-class neighbours in one NMS-merged box, or overlapping
+//!    boxes): it is cut there and the part scoring best as in step 3 is kept.
+//! 5. **outliers** — points farther horizontally from the cluster's median than
 //!    `outlier_factor` × the prior's half diagonal are dropped (mixed pixels, bridges).
 
 use super::config::SegmentationConfig;
@@ -133,6 +138,7 @@ impl PointScratch {
         seg: &SegmentationConfig,
         gap_min: f32,
         gap_per_m: f32,
+        spacing_per_m: f32,
         out: &mut Vec<Vec3>,
     ) {
         out.clear();
@@ -211,13 +217,113 @@ impl PointScratch {
         else {
             return;
         };
+        let mut members: Vec<usize> = Vec::new();
         for i in 0..n {
             if self.alive(i) && find(&mut self.parent, i as u32) == best {
-                out.push(self.raw[i]);
+                members.push(i);
             }
         }
+        if seg.split {
+            let z = members.iter().map(|&i| self.depth[i]).sum::<f32>() / members.len() as f32;
+            let gap = seg.split_gap.max(2.5 * spacing_per_m * z);
+            if let Some(cut) = split_at_gap(
+                &self.raw,
+                &mut members,
+                seg.split_factor * prior.size[0],
+                gap,
+            ) {
+                let stats = |part: &[usize]| {
+                    let mut c = Cluster {
+                        root: 0,
+                        n: 0,
+                        gx: [u32::MAX, 0],
+                        gy: [u32::MAX, 0],
+                        sum_gx: 0.0,
+                        sum_gy: 0.0,
+                        sum_depth: 0.0,
+                        lo: Vec3::splat(f32::INFINITY),
+                        hi: Vec3::splat(f32::NEG_INFINITY),
+                    };
+                    for &i in part {
+                        let cell = self.cell[i] as usize;
+                        let (gx, gy) = ((cell % grid.gw) as u32, (cell / grid.gw) as u32);
+                        c.n += 1;
+                        c.gx = [c.gx[0].min(gx), c.gx[1].max(gx)];
+                        c.gy = [c.gy[0].min(gy), c.gy[1].max(gy)];
+                        c.sum_gx += gx as f32;
+                        c.sum_gy += gy as f32;
+                        c.sum_depth += self.depth[i];
+                        c.lo = c.lo.min(self.raw[i]);
+                        c.hi = c.hi.max(self.raw[i]);
+                    }
+                    c
+                };
+                let (a, b) = members.split_at(cut);
+                let keep_a = score(&stats(a)) >= score(&stats(b));
+                members = if keep_a { a.to_vec() } else { b.to_vec() };
+            }
+        }
+        out.extend(members.iter().map(|&i| self.raw[i]));
         reject_outliers(out, prior.half_diagonal() * seg.outlier_factor + 0.02);
     }
+}
+
+/// Smallest share of a split cluster's points on either side of the cut (a partly hidden
+/// neighbour still shows its front face).
+const MIN_PART: f32 = 0.15;
+
+/// A split band holds at most this fraction of the cluster's mean point density.
+const VALLEY: f32 = 0.25;
+
+/// Split `members` (indices into `pts`) when their horizontal extent along the principal axis
+/// exceeds `max_len` and a band of width `gap` across that axis, with ≥ [`MIN_PART`] of the
+/// points on each side, holds at most [`VALLEY`] × the mean density (the sparsest such band). Sorts `members` along the axis and returns the
+/// index of the first member of the second part.
+fn split_at_gap(pts: &[Vec3], members: &mut [usize], max_len: f32, gap: f32) -> Option<usize> {
+    let n = members.len();
+    if n < 10 {
+        return None;
+    }
+    let m = members
+        .iter()
+        .map(|&i| pts[i].truncate())
+        .sum::<glam::Vec2>()
+        / n as f32;
+    let (mut sxx, mut sxy, mut syy) = (0.0f32, 0.0f32, 0.0f32);
+    for &i in members.iter() {
+        let d = pts[i].truncate() - m;
+        sxx += d.x * d.x;
+        sxy += d.x * d.y;
+        syy += d.y * d.y;
+    }
+    // Principal axis of the 2 × 2 covariance.
+    let angle = 0.5 * (2.0 * sxy).atan2(sxx - syy);
+    let axis = glam::Vec2::from_angle(angle);
+    let t = |i: usize| (pts[i].truncate() - m).dot(axis);
+    members.sort_by(|a, b| t(*a).total_cmp(&t(*b)));
+    let min_side = (n as f32 * MIN_PART).ceil() as usize;
+    let (lo, hi) = (t(members[n / 50]), t(members[n - 1 - n / 50]));
+    if hi - lo <= max_len {
+        return None;
+    }
+    // The sparsest band of width `gap` between the two sides: a gap between two objects holds
+    // at most a few mixed (flying) pixels, a quarter of the cluster's mean density at most.
+    let mean = n as f32 * gap / (hi - lo);
+    let mut best: Option<(usize, usize)> = None;
+    let mut j = min_side;
+    for k in min_side..n - min_side {
+        // members[k..j] lie within `gap` after members[k - 1].
+        j = j.max(k);
+        while j < n && t(members[j]) - t(members[k - 1]) < gap {
+            j += 1;
+        }
+        let inside = j - k;
+        if j <= n - min_side && best.is_none_or(|(c, _)| inside < c) {
+            best = Some((inside, k));
+        }
+    }
+    let (count, k) = best?;
+    (count as f32 <= VALLEY * mean).then_some(k + count / 2)
 }
 
 /// Drop points farther than `radius` (horizontally) from the median point.
@@ -253,6 +359,32 @@ mod tests {
         let (h, n) = height_peak(zs.iter().copied(), 0.01, 0.0, 1.2);
         assert!((h - 0.752).abs() < 0.005, "{h}");
         assert!(n >= 60, "{n}");
+    }
+
+    #[test]
+    fn a_long_cluster_splits_at_its_gap_and_a_vase_does_not() {
+        // Two books 0.2 m long, 5 cm apart along y (diagonal jitter in x).
+        let mut pts = Vec::new();
+        for k in 0..60 {
+            let y = (k % 20) as f32 * 0.01 + if k < 40 { 0.0 } else { 0.25 };
+            pts.push(Vec3::new(0.01 * (k % 3) as f32, y, 0.75));
+        }
+        let mut idx: Vec<usize> = (0..pts.len()).collect();
+        let cut = split_at_gap(&pts, &mut idx, 0.36, 0.03).expect("split");
+        assert_eq!(cut, 40);
+        assert!(idx[..cut].iter().all(|&i| pts[i].y < 0.2));
+        // A 0.25 m vase's front arc: long for a 0.12 m prior, but no gap.
+        let arc: Vec<Vec3> = (0..40)
+            .map(|k| {
+                let a = k as f32 / 39.0 * std::f32::consts::PI;
+                Vec3::new(0.125 * a.sin(), 0.125 * a.cos(), 0.9)
+            })
+            .collect();
+        let mut idx: Vec<usize> = (0..arc.len()).collect();
+        assert_eq!(split_at_gap(&arc, &mut idx, 0.18, 0.03), None);
+        // Short enough: never split.
+        let mut idx: Vec<usize> = (0..pts.len()).collect();
+        assert_eq!(split_at_gap(&pts, &mut idx, 0.5, 0.03), None);
     }
 
     #[test]

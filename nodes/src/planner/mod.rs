@@ -80,8 +80,7 @@ pub mod vpsom;
 pub use baselines::{CoveragePlanner, FrontierPlanner};
 pub use config::{
     AblationConfig, BootstrapConfig, CoverageConfig, FaRelevance, FrontierConfig, GbvConfig,
-    GiveUpConfig,
-    LbvConfig, Occluders, PlannerConfig, PlannerKind, UnknownPlanner, UnknownTerm,
+    GiveUpConfig, LbvConfig, Occluders, PlannerConfig, PlannerKind, UnknownPlanner, UnknownTerm,
 };
 pub use evaluate::{EvalParams, FaFilter, Target, Weights, evaluate_view, evaluate_view_in};
 pub use gbv::{GbvJob, GbvResult};
