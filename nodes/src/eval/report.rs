@@ -461,7 +461,9 @@ impl Report {
                     let _ = write!(md, " {text} |");
                 }
                 if let Some(table) = paper {
-                    match paper_scene(&scene) {
+                    // The paper's averages compare only with an average over its own scenes.
+                    let all_paper = self.scenes.iter().all(|s| paper_scene(s).is_some());
+                    match paper_scene(&scene).filter(|_| scene != AVERAGE || all_paper) {
                         Some(si) => {
                             for v in table[si][row] {
                                 let _ = write!(md, " {v:.d$} |", d = def.decimals);
