@@ -298,6 +298,18 @@ pub fn wrap_angle(a: f32) -> f32 {
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    #[test]
+    fn grid_traversal_visits_each_crossed_cell_once_in_order() {
+        // From (0.5, 0.5) to (2.5, 1.5): x crossing at t = 0.25, y at 0.5, x again at 0.75.
+        let cells: Vec<_> = GridTraversal::new(Vec2::new(0.5, 0.5), Vec2::new(2.5, 1.5)).collect();
+        assert_eq!(cells, [(0, 0), (1, 0), (1, 1), (2, 1)]);
+        let t = GridTraversal::new(Vec2::new(3.2, 0.5), Vec2::new(0.7, 0.5));
+        assert_eq!(t.len(), 4);
+        assert_eq!(t.collect::<Vec<_>>(), [(3, 0), (2, 0), (1, 0), (0, 0)]);
+        let one: Vec<_> = GridTraversal::new(Vec2::splat(1.2), Vec2::splat(1.8)).collect();
+        assert_eq!(one, [(1, 1)]);
+    }
     use std::f32::consts::{FRAC_PI_2, PI};
 
     fn close(a: Vec3, b: Vec3) -> bool {
@@ -413,3 +425,73 @@ mod tests {
         assert_eq!(out[..2], [Vec2::new(1.0, 0.0), Vec2::new(3.0, 0.0)]);
     }
 }
+
+/// The grid cells a 2D segment crosses, in order (Amanatides–Woo traversal: each crossed cell
+/// once). `a` and `b` are in cell units (world position minus grid origin, over the resolution);
+/// the iterator yields `(ix, iy)` from `a`'s cell to `b`'s cell inclusive. Cells may lie outside
+/// the grid: the caller bounds them.
+#[derive(Debug, Clone, Copy)]
+pub struct GridTraversal {
+    cell: (i64, i64),
+    step: (i64, i64),
+    t_max: (f32, f32),
+    t_delta: (f32, f32),
+    left: i64,
+}
+
+impl GridTraversal {
+    /// The traversal from `a` to `b` (cell units).
+    pub fn new(a: Vec2, b: Vec2) -> Self {
+        let cell = (a.x.floor() as i64, a.y.floor() as i64);
+        let end = (b.x.floor() as i64, b.y.floor() as i64);
+        let d = b - a;
+        let step = (
+            if d.x >= 0.0 { 1 } else { -1 },
+            if d.y >= 0.0 { 1 } else { -1 },
+        );
+        let next = |i: i64, s: i64, p: f32, dp: f32| {
+            if dp.abs() < 1e-9 {
+                f32::INFINITY
+            } else {
+                ((i + (s > 0) as i64) as f32 - p) / dp
+            }
+        };
+        Self {
+            cell,
+            step,
+            t_max: (
+                next(cell.0, step.0, a.x, d.x),
+                next(cell.1, step.1, a.y, d.y),
+            ),
+            t_delta: (1.0 / d.x.abs().max(1e-9), 1.0 / d.y.abs().max(1e-9)),
+            left: (end.0 - cell.0).abs() + (end.1 - cell.1).abs() + 1,
+        }
+    }
+}
+
+impl Iterator for GridTraversal {
+    type Item = (i64, i64);
+
+    fn next(&mut self) -> Option<(i64, i64)> {
+        if self.left <= 0 {
+            return None;
+        }
+        self.left -= 1;
+        let here = self.cell;
+        if self.t_max.0 < self.t_max.1 {
+            self.cell.0 += self.step.0;
+            self.t_max.0 += self.t_delta.0;
+        } else {
+            self.cell.1 += self.step.1;
+            self.t_max.1 += self.t_delta.1;
+        }
+        Some(here)
+    }
+
+    fn size_hint(&self) -> (usize, Option<usize>) {
+        let n = self.left.max(0) as usize;
+        (n, Some(n))
+    }
+}
+
+impl ExactSizeIterator for GridTraversal {}

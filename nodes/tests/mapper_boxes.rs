@@ -4,36 +4,12 @@
 
 mod mapper_common;
 
-use glam::{Affine3A, Vec3};
-use mapper_common::{RenderOpts, Scene, Shape, render};
-use nodes::geom::{Camera, CameraMount};
+use glam::Vec3;
+use mapper_common::{RenderOpts, Scene, Shape, camera, find, render, state, view};
 use nodes::mapper::{Mapper, MapperConfig};
 use rand::SeedableRng;
 use rand_pcg::Pcg64;
-use shm_types::{DepthFrame, Detection, Detections, RobotState, boxed_zeroed, class_id};
-
-fn camera() -> Camera {
-    nodes::config::CameraConfig::default().camera()
-}
-
-fn state() -> RobotState {
-    RobotState {
-        localization_ok: 1,
-        ..Default::default()
-    }
-}
-
-/// Camera on a circle of `radius` around `target` at azimuth `deg`, looking at it.
-fn view(target: Vec3, radius: f32, deg: f32) -> Affine3A {
-    let a = deg.to_radians();
-    let mount = CameraMount::default();
-    let base = [
-        target.x + radius * a.cos(),
-        target.y + radius * a.sin(),
-        a + std::f32::consts::PI,
-    ];
-    mount.camera_pose(base, 0.0, mount.pitch())
-}
+use shm_types::{DepthFrame, Detection, Detections, boxed_zeroed, class_id};
 
 /// A table with a cup 5 cm from its front edge and a bottle 4 cm beside the cup.
 fn edge_scene() -> Scene {
@@ -65,11 +41,6 @@ fn fp_scene() -> Scene {
         false,
     ));
     s
-}
-
-fn find(dets: &Detections, class: &str) -> Option<usize> {
-    let id = class_id(class).unwrap();
-    dets.detections().iter().position(|d| d.class_id == id)
 }
 
 /// Grow a box by `frac` of its size on every side (clipped to the image).

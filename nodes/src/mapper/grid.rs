@@ -6,6 +6,7 @@
 //! it. Rays are cut at `max_range` (horizontal). Each cell keeps a clamped log-odds-like score
 //! (hit +4, pass −1): never touched → unknown, score > 0 → occupied, else free.
 
+use crate::geom::GridTraversal;
 use glam::{Affine3A, Vec2};
 use shm_types::{DepthFrame, OccupancyGrid, grid_cell};
 
@@ -94,36 +95,17 @@ impl ExplorationGrid {
     /// traversal: each crossed cell once).
     fn free_along(&mut self, from: Vec2, to: Vec2) {
         let o = Vec2::from(self.cfg.origin);
-        let a = (from - o) / self.cfg.resolution;
-        let b = (to - o) / self.cfg.resolution;
-        let (mut ix, mut iy) = (a.x.floor() as i64, a.y.floor() as i64);
-        let (ex, ey) = (b.x.floor() as i64, b.y.floor() as i64);
-        let d = b - a;
-        let (sx, sy) = (
-            if d.x >= 0.0 { 1 } else { -1 },
-            if d.y >= 0.0 { 1 } else { -1 },
+        let (a, b) = (
+            (from - o) / self.cfg.resolution,
+            (to - o) / self.cfg.resolution,
         );
-        let next = |i: i64, s: i64, p: f32, dp: f32| {
-            if dp.abs() < 1e-9 {
-                f32::INFINITY
-            } else {
-                ((i + (s > 0) as i64) as f32 - p) / dp
-            }
-        };
-        let (mut tx, mut ty) = (next(ix, sx, a.x, d.x), next(iy, sy, a.y, d.y));
-        let (dtx, dty) = (1.0 / d.x.abs().max(1e-9), 1.0 / d.y.abs().max(1e-9));
         let (w, h) = (self.cfg.width as i64, self.cfg.height as i64);
-        let steps = (ex - ix).abs() + (ey - iy).abs();
-        for _ in 0..steps {
+        let cells = GridTraversal::new(a, b);
+        // Every crossed cell but the last (the end cell is excluded).
+        let crossed = cells.len() - 1;
+        for (ix, iy) in cells.take(crossed) {
             if ix >= 0 && iy >= 0 && ix < w && iy < h {
                 self.add((iy * w + ix) as usize, -1);
-            }
-            if tx < ty {
-                ix += sx;
-                tx += dtx;
-            } else {
-                iy += sy;
-                ty += dty;
             }
         }
     }

@@ -51,6 +51,35 @@ struct Cluster {
     hi: Vec3,
 }
 
+impl Cluster {
+    /// A cluster with no member yet.
+    fn empty(root: u32) -> Self {
+        Self {
+            root,
+            n: 0,
+            gx: [u32::MAX, 0],
+            gy: [u32::MAX, 0],
+            sum_gx: 0.0,
+            sum_gy: 0.0,
+            sum_depth: 0.0,
+            lo: Vec3::splat(f32::INFINITY),
+            hi: Vec3::splat(f32::NEG_INFINITY),
+        }
+    }
+
+    /// Add one point: its sample-grid cell `(gx, gy)`, camera depth and world position.
+    fn add(&mut self, gx: u32, gy: u32, depth: f32, p: Vec3) {
+        self.n += 1;
+        self.gx = [self.gx[0].min(gx), self.gx[1].max(gx)];
+        self.gy = [self.gy[0].min(gy), self.gy[1].max(gy)];
+        self.sum_gx += gx as f32;
+        self.sum_gy += gy as f32;
+        self.sum_depth += depth;
+        self.lo = self.lo.min(p);
+        self.hi = self.hi.max(p);
+    }
+}
+
 /// Peak of a height histogram: (plane height, points within ± one bin of it).
 fn height_peak(zs: impl Iterator<Item = f32> + Clone, bin: f32, lo: f32, hi: f32) -> (f32, u32) {
     let nb = (((hi - lo) / bin).ceil() as usize).clamp(1, 512);
@@ -162,33 +191,15 @@ impl PointScratch {
             let r = find(&mut self.parent, i as u32);
             let slot = match self.weight[r as usize] {
                 0 => {
-                    clusters.push(Cluster {
-                        root: r,
-                        n: 0,
-                        gx: [u32::MAX, 0],
-                        gy: [u32::MAX, 0],
-                        sum_gx: 0.0,
-                        sum_gy: 0.0,
-                        sum_depth: 0.0,
-                        lo: Vec3::splat(f32::INFINITY),
-                        hi: Vec3::splat(f32::NEG_INFINITY),
-                    });
+                    clusters.push(Cluster::empty(r));
                     self.weight[r as usize] = clusters.len() as u32;
                     clusters.len() - 1
                 }
                 s => s as usize - 1,
             };
-            let c = &mut clusters[slot];
             let cell = self.cell[i] as usize;
             let (gx, gy) = ((cell % grid.gw) as u32, (cell / grid.gw) as u32);
-            c.n += 1;
-            c.gx = [c.gx[0].min(gx), c.gx[1].max(gx)];
-            c.gy = [c.gy[0].min(gy), c.gy[1].max(gy)];
-            c.sum_gx += gx as f32;
-            c.sum_gy += gy as f32;
-            c.sum_depth += self.depth[i];
-            c.lo = c.lo.min(self.raw[i]);
-            c.hi = c.hi.max(self.raw[i]);
+            clusters[slot].add(gx, gy, self.depth[i], self.raw[i]);
         }
         let min_n = (alive as f32 * 0.02).max(3.0) as u32;
         for c in clusters.iter().filter(|c| c.n >= min_n) {
@@ -233,28 +244,11 @@ impl PointScratch {
                 gap,
             ) {
                 let stats = |part: &[usize]| {
-                    let mut c = Cluster {
-                        root: 0,
-                        n: 0,
-                        gx: [u32::MAX, 0],
-                        gy: [u32::MAX, 0],
-                        sum_gx: 0.0,
-                        sum_gy: 0.0,
-                        sum_depth: 0.0,
-                        lo: Vec3::splat(f32::INFINITY),
-                        hi: Vec3::splat(f32::NEG_INFINITY),
-                    };
+                    let mut c = Cluster::empty(0);
                     for &i in part {
                         let cell = self.cell[i] as usize;
                         let (gx, gy) = ((cell % grid.gw) as u32, (cell / grid.gw) as u32);
-                        c.n += 1;
-                        c.gx = [c.gx[0].min(gx), c.gx[1].max(gx)];
-                        c.gy = [c.gy[0].min(gy), c.gy[1].max(gy)];
-                        c.sum_gx += gx as f32;
-                        c.sum_gy += gy as f32;
-                        c.sum_depth += self.depth[i];
-                        c.lo = c.lo.min(self.raw[i]);
-                        c.hi = c.hi.max(self.raw[i]);
+                        c.add(gx, gy, self.depth[i], self.raw[i]);
                     }
                     c
                 };

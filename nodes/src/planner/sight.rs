@@ -22,7 +22,7 @@
 //! GBV rounds (with the navigation grid) use it. The baselines' scoring of their own views keeps
 //! the unfiltered sum (`FaFilter::FRUSTUM`).
 
-use crate::geom::Cuboid;
+use crate::geom::{Cuboid, GridTraversal};
 use crate::planner::clusters::cuboid;
 use glam::{Vec2, Vec3};
 use parry3d::math::{Pose, Rot3};
@@ -93,27 +93,8 @@ pub fn wall_blocks(walls: &Walls<'_>, map: &ObjectMap, from: Vec3, to: Vec3) -> 
         return false;
     }
     let end = a2 + (b2 - a2) * (keep / len);
-    let a = (a2 - o) / res;
-    let b = (end - o) / res;
-    let (mut ix, mut iy) = (a.x.floor() as i64, a.y.floor() as i64);
-    let (ex, ey) = (b.x.floor() as i64, b.y.floor() as i64);
-    let d = b - a;
-    let (sx, sy) = (
-        if d.x >= 0.0 { 1 } else { -1 },
-        if d.y >= 0.0 { 1 } else { -1 },
-    );
-    let next = |i: i64, s: i64, p: f32, dp: f32| {
-        if dp.abs() < 1e-9 {
-            f32::INFINITY
-        } else {
-            ((i + (s > 0) as i64) as f32 - p) / dp
-        }
-    };
-    let (mut tx, mut ty) = (next(ix, sx, a.x, d.x), next(iy, sy, a.y, d.y));
-    let (dtx, dty) = (1.0 / d.x.abs().max(1e-9), 1.0 / d.y.abs().max(1e-9));
     let margin = walls.inflation + res + walls.slack;
-    let steps = (ex - ix).abs() + (ey - iy).abs();
-    for _ in 0..=steps {
+    for (ix, iy) in GridTraversal::new((a2 - o) / res, (end - o) / res) {
         if ix >= 0 && iy >= 0 && ix < w && iy < h {
             let i = (iy * w + ix) as usize;
             if cells.get(i) == Some(&grid_cell::OCCUPIED) {
@@ -126,13 +107,6 @@ pub fn wall_blocks(walls: &Walls<'_>, map: &ObjectMap, from: Vec3, to: Vec3) -> 
                     return true;
                 }
             }
-        }
-        if tx < ty {
-            ix += sx;
-            tx += dtx;
-        } else {
-            iy += sy;
-            ty += dty;
         }
     }
     false

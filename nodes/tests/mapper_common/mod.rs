@@ -5,11 +5,12 @@
 #![allow(dead_code)]
 
 use glam::{Affine3A, Mat3, Vec3};
-use nodes::geom::{Camera, Cuboid, affine_to_pose};
+use nodes::geom::{Camera, CameraMount, Cuboid, affine_to_pose};
 use rand::Rng;
 use rand_distr::{Distribution, Normal};
 use shm_types::{
-    ClassId, DepthFrame, Detection, Detections, MAX_DETECTIONS, class_id, is_background_class,
+    ClassId, DepthFrame, Detection, Detections, MAX_DETECTIONS, RobotState, class_id,
+    is_background_class,
 };
 
 /// One synthetic object.
@@ -329,4 +330,35 @@ pub fn busy_scene() -> Scene {
         ),
     ]);
     s
+}
+
+/// The default camera model.
+pub fn camera() -> Camera {
+    nodes::config::CameraConfig::default().camera()
+}
+
+/// A robot state with localization OK (the mapper refuses frames without it).
+pub fn state() -> RobotState {
+    RobotState {
+        localization_ok: 1,
+        ..Default::default()
+    }
+}
+
+/// Camera on a circle of `radius` around `target` at azimuth `deg`, looking at it.
+pub fn view(target: Vec3, radius: f32, deg: f32) -> Affine3A {
+    let a = deg.to_radians();
+    let mount = CameraMount::default();
+    let base = [
+        target.x + radius * a.cos(),
+        target.y + radius * a.sin(),
+        a + std::f32::consts::PI,
+    ];
+    mount.camera_pose(base, 0.0, mount.pitch())
+}
+
+/// Index of the first detection of `class`.
+pub fn find(dets: &Detections, class: &str) -> Option<usize> {
+    let id = class_id(class).unwrap();
+    dets.detections().iter().position(|d| d.class_id == id)
 }
