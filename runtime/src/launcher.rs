@@ -362,14 +362,46 @@ mod tests {
         }
     }
 
+    /// Poll until `n` events arrived; the 60 s limit only ends a hung test.
     fn poll_until(l: &mut Launcher, n: usize) -> Vec<ChildEvent> {
         let mut all = Vec::new();
-        let deadline = Instant::now() + Duration::from_secs(20);
+        let deadline = Instant::now() + Duration::from_secs(60);
         while all.len() < n && Instant::now() < deadline {
             all.extend(l.poll());
             std::thread::sleep(Duration::from_millis(10));
         }
         all
+    }
+
+    /// A fresh directory for the readiness files of one test.
+    fn ready_dir(test: &str) -> PathBuf {
+        let d = std::env::temp_dir().join(format!("vpsom-launcher-{test}-{}", std::process::id()));
+        let _ = std::fs::remove_dir_all(&d);
+        std::fs::create_dir_all(&d).unwrap();
+        d
+    }
+
+    /// A shell that installs `trap`, then says so by creating `ready` (atomically: written, then
+    /// renamed), then loops.
+    fn trapping_sh(name: &str, trap: &str, ready: &std::path::Path) -> ChildSpec {
+        let r = ready.display();
+        sh(
+            name,
+            &format!(
+                "{trap}; echo ok > '{r}.tmp' && mv '{r}.tmp' '{r}'; while true; do sleep 0.05; done"
+            ),
+            0,
+        )
+    }
+
+    /// Wait until every file exists: the children have installed their traps. The 60 s limit
+    /// only ends a hung test.
+    fn wait_ready(files: &[PathBuf]) {
+        let deadline = Instant::now() + Duration::from_secs(60);
+        while !files.iter().all(|f| f.exists()) {
+            assert!(Instant::now() < deadline, "children never became ready");
+            std::thread::sleep(Duration::from_millis(5));
+        }
     }
 
     #[test]
@@ -409,35 +441,40 @@ mod tests {
 
     #[test]
     fn stop_all_interrupts_then_kills() {
-        let mut l =
+        let dir = ready_dir("stop");
+        // The polite child exits on SIGINT: a generous grace, which stop_all cuts short as soon
+        // as every child has exited.
+        let mut polite =
             Launcher::new("launcher-test-b", iceoryx2::config::Config::global_config()).unwrap();
-        l.spawn(sh(
-            "polite",
-            "trap 'exit 0' INT; while true; do sleep 0.05; done",
-            0,
-        ))
-        .unwrap();
-        l.spawn(sh(
-            "stubborn",
-            "trap '' INT; while true; do sleep 0.05; done",
-            0,
-        ))
-        .unwrap();
-        std::thread::sleep(Duration::from_millis(200));
-        assert!(l.poll().is_empty());
-        let mut out = l.stop_all(Duration::from_millis(500));
-        out.sort_by(|a, b| a.0.cmp(&b.0));
-        assert_eq!(out[0], ("polite".to_string(), Some(ExitReason::Code(0))));
+        let ready_p = dir.join("polite");
+        polite
+            .spawn(trapping_sh("polite", "trap 'exit 0' INT", &ready_p))
+            .unwrap();
+        // The stubborn child ignores SIGINT: whatever the grace, it ends by SIGKILL.
+        let mut stubborn =
+            Launcher::new("launcher-test-c", iceoryx2::config::Config::global_config()).unwrap();
+        let ready_s = dir.join("stubborn");
+        stubborn
+            .spawn(trapping_sh("stubborn", "trap '' INT", &ready_s))
+            .unwrap();
+        // Signals are sent only once both traps are installed.
+        wait_ready(&[ready_p, ready_s]);
+        assert!(polite.poll().is_empty());
+        assert!(stubborn.poll().is_empty());
+        let out = polite.stop_all(Duration::from_secs(60));
+        assert_eq!(out, vec![("polite".to_string(), Some(ExitReason::Code(0)))]);
+        let out = stubborn.stop_all(Duration::from_millis(200));
         assert_eq!(
-            out[1],
-            (
+            out,
+            vec![(
                 "stubborn".to_string(),
                 Some(ExitReason::Signal(libc::SIGKILL))
-            )
+            )]
         );
         assert_eq!(
             ExitReason::Signal(9).to_string(),
             "killed by signal 9 (SIGKILL)"
         );
+        let _ = std::fs::remove_dir_all(&dir);
     }
 }

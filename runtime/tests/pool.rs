@@ -14,6 +14,8 @@ struct Counts {
     accepted: AtomicU64,
     busy: AtomicU64,
     results: AtomicU64,
+    /// Jobs that left their wait loop (released, or the 60 s safety limit ran out).
+    finished: AtomicU64,
 }
 
 #[test]
@@ -43,13 +45,14 @@ fn a_fixed_rate_caller_is_never_blocked_by_a_saturated_pool() {
         .max_cycles(CYCLES)
         .spawn(move || {
             move |cycle: &Cycle| {
-                let r = r.clone();
+                let (r, c2) = (r.clone(), c.clone());
                 let job_id = cycle.index;
                 let job = move || {
                     let t0 = Instant::now();
                     while !r.load(Ordering::Acquire) && t0.elapsed() < Duration::from_secs(60) {
                         std::hint::spin_loop();
                     }
+                    c2.finished.fetch_add(1, Ordering::Release);
                     job_id
                 };
                 match p.try_submit(job) {
@@ -75,7 +78,12 @@ fn a_fixed_rate_caller_is_never_blocked_by_a_saturated_pool() {
         .unwrap();
     assert_eq!(summary.reason, StopReason::MaxCycles);
     assert_eq!(summary.monitor.cycles(), CYCLES);
-    assert!(!release.load(Ordering::Acquire), "jobs were still running");
+    // The caller finished while no job had: the pool was saturated the whole time.
+    assert_eq!(
+        counts.finished.load(Ordering::Acquire),
+        0,
+        "a job ended before the caller loop did (60 s safety limit?)"
+    );
     assert_eq!(counts.accepted.load(Ordering::Relaxed), 4, "queue limit");
     assert_eq!(counts.busy.load(Ordering::Relaxed), CYCLES - 4);
     assert_eq!(counts.results.load(Ordering::Relaxed), 0);
@@ -94,6 +102,7 @@ fn a_fixed_rate_caller_is_never_blocked_by_a_saturated_pool() {
         .collect();
     got.sort_unstable();
     assert_eq!(got, vec![0, 1, 2, 3]);
+    assert_eq!(counts.finished.load(Ordering::Acquire), 4);
     assert_eq!(pool.outstanding(), 0);
     let id = pool.try_submit(|| 42).unwrap();
     let done = pool.recv_timeout(Duration::from_secs(60)).unwrap();

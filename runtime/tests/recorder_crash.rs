@@ -29,6 +29,8 @@ fn child(path: &str) -> ! {
     let start = Instant::now();
     for i in 1.. {
         h.record_state(&state(i));
+        // The parent learns how many states were handed to the recorder before the kill.
+        println!("recorded {i}");
         if i % 3 == 0 {
             f.header = header(i);
             f.width = frame.width;
@@ -68,17 +70,42 @@ fn sigkill_leaves_a_file_readable_up_to_its_last_chunk() {
         .stdout(Stdio::piped())
         .spawn()
         .unwrap();
-    // Wait until the child records, let it run ~1.5 s (several flush intervals), then SIGKILL.
-    let mut out = BufReader::new(c.stdout.take().unwrap());
-    let mut line = String::new();
-    while !line.contains("recording") {
-        line.clear();
-        assert!(out.read_line(&mut line).unwrap() > 0, "child ended early");
+    // Wait until the child records, then until its file holds at least 30 states in completed
+    // chunks (read back as the parent sees it on disk; several flush intervals), then SIGKILL.
+    // A reader thread keeps the last "recorded N" line: the states offered before the kill.
+    let out = BufReader::new(c.stdout.take().unwrap());
+    let (tx, rx) = std::sync::mpsc::channel();
+    let lines = std::thread::spawn(move || {
+        let mut last = 0u64;
+        for line in out.lines().map_while(Result::ok) {
+            if let Some(n) = line.strip_prefix("recorded ") {
+                if last == 0 {
+                    let _ = tx.send(());
+                }
+                last = n.trim().parse().unwrap_or(last);
+            }
+        }
+        last
+    });
+    rx.recv_timeout(Duration::from_secs(60))
+        .expect("child never started recording");
+    let t0 = Instant::now();
+    loop {
+        let n = info(&path).map_or(0, |i| i.count(topic::TF));
+        if n >= 30 {
+            break;
+        }
+        // Only a hang fails here.
+        assert!(
+            t0.elapsed() < Duration::from_secs(60),
+            "only {n} states on disk"
+        );
+        std::thread::sleep(Duration::from_millis(50));
     }
-    std::thread::sleep(Duration::from_millis(1500));
     c.kill().unwrap(); // SIGKILL on Unix
     let status = c.wait().unwrap();
     assert!(!status.success());
+    let offered = lines.join().unwrap();
 
     let (msgs, end) = read_all(&path);
     assert!(
@@ -96,9 +123,16 @@ fn sigkill_leaves_a_file_readable_up_to_its_last_chunk() {
         .collect();
     let k = seqs.len() as u64;
     assert_eq!(seqs, (1..=k).collect::<Vec<_>>());
-    // Lower bound only: after 1.5 s with a 0.2 s flush interval, at least the first 0.3 s of
-    // data (30 states) must be in completed chunks.
+    // The 30 states seen on disk before the kill are still there; nothing beyond what was
+    // offered. The loss (states in the torn chunk or still queued) is printed: it depends on
+    // the flush interval and on the machine's load.
     assert!(k >= 30, "only {k} states survived: {end:?}");
+    assert!(k <= offered, "{k} states read, {offered} offered");
+    eprintln!(
+        "SIGKILL lost {} of {offered} states ({:.2} s at 100 Hz; flush interval {FLUSH_S} s)",
+        offered - k,
+        (offered - k) as f64 / 100.0
+    );
     assert!(msgs.iter().any(|m| m.topic == topic::DEPTH));
     let inf = info(&path).unwrap();
     assert_eq!(inf.count(topic::TF), k);
