@@ -174,14 +174,16 @@ struct SensingCmd {
 
 #[derive(Debug, Subcommand)]
 enum TraceCmd {
-    /// Topics, message counts, time range and drop counts.
+    /// Topics, message counts, time range and drop counts (all segments of a run when FILE is
+    /// its first segment, trace.mcap, or its directory).
     Info {
-        /// MCAP file.
+        /// MCAP file, or a run directory.
         file: PathBuf,
     },
-    /// Export a JSON channel as CSV (one column per field, plus log_time_ns).
+    /// Export a JSON channel as CSV (one column per field, plus log_time_ns); all segments of a
+    /// run as for `info`.
     Export {
-        /// MCAP file.
+        /// MCAP file, or a run directory.
         file: PathBuf,
         /// Topic, e.g. /runtime/deadline.
         #[arg(long)]
@@ -189,6 +191,14 @@ enum TraceCmd {
         /// CSV file to write (default: stdout).
         #[arg(long, short)]
         out: Option<PathBuf>,
+    },
+    /// Write a finished, indexed MCAP holding every complete chunk of a file cut short by a
+    /// crash (SIGKILL of the recorder).
+    Recover {
+        /// The torn MCAP file.
+        input: PathBuf,
+        /// The file to write (must differ from the input).
+        output: PathBuf,
     },
 }
 
@@ -544,6 +554,10 @@ fn trace(cmd: TraceCmd) -> anyhow::Result<ExitCode> {
                 None => inspect::export_csv(&file, &topic, &mut std::io::stdout().lock())?,
             };
             eprintln!("{rows} rows");
+        }
+        TraceCmd::Recover { input, output } => {
+            let r = runtime::recorder::recover::recover(&input, &output)?;
+            println!("{}: {r}", output.display());
         }
     }
     Ok(ExitCode::SUCCESS)

@@ -1,6 +1,8 @@
 //! Reading traces back: [`info`] (topics, counts, time range, drops) and [`export_csv`] for the
 //! JSON channels. Both stream the file with constant memory and accept a file cut short by a
-//! crash (they read up to the last complete record and report the truncation).
+//! crash (they read up to the last complete record and report the truncation). Given the first
+//! segment of a run (`trace.mcap`) or its directory, both read every segment of the run
+//! (`trace.1.mcap`, ...; see [`super::recover`]) as one trace.
 
 use super::schemas::{STATS_METADATA, topic};
 use super::{DropCounts, RecorderError};
@@ -187,8 +189,10 @@ pub struct TraceInfo {
     /// Drop counts: from the final `recorder_stats` metadata if present, else the newest
     /// `/recorder/stats` message.
     pub drops: Option<DropCounts>,
-    /// Metadata records by name.
+    /// Metadata records by name (a later segment's record replaces an earlier one's).
     pub metadata: BTreeMap<String, BTreeMap<String, String>>,
+    /// The segments read, in order, with how each scan ended (one for a single file).
+    pub segments: Vec<(PathBuf, ScanEnd)>,
 }
 
 impl TraceInfo {
@@ -214,8 +218,71 @@ fn drops_from_metadata(m: &BTreeMap<String, String>) -> DropCounts {
     d
 }
 
-/// Topics, message counts, time range and drop counts of a trace (finished or crash-truncated).
+/// The files to read for `path`: every segment of the run when it names a run's first segment
+/// or directory, else the file itself.
+fn files_of(path: &Path) -> Vec<PathBuf> {
+    let segs = super::recover::segments(path);
+    if segs.is_empty() {
+        vec![super::recover::run_first_segment(path)]
+    } else {
+        segs
+    }
+}
+
+/// Topics, message counts, time range and drop counts of a trace (finished or crash-truncated),
+/// all segments of a run merged: counts and drops summed, time ranges joined.
 pub fn info(path: &Path) -> Result<TraceInfo, RecorderError> {
+    let mut parts = files_of(path).into_iter().map(|f| info_one(&f));
+    let mut all = parts.next().expect("at least one file")?;
+    for part in parts {
+        let p = part?;
+        for t in p.topics {
+            match all.topics.iter_mut().find(|a| a.topic == t.topic) {
+                Some(a) => {
+                    a.messages += t.messages;
+                    a.first_ns = a.first_ns.into_iter().chain(t.first_ns).min();
+                    a.last_ns = a.last_ns.into_iter().chain(t.last_ns).max();
+                }
+                None => all.topics.push(t),
+            }
+        }
+        all.start_ns = all.start_ns.into_iter().chain(p.start_ns).min();
+        all.end_ns = all.end_ns.into_iter().chain(p.end_ns).max();
+        // Each recorder instance counts its own drops from zero: the run's are the sum.
+        all.drops = match (all.drops.take(), p.drops) {
+            (Some(mut a), Some(b)) => {
+                for (t, n) in b.offered {
+                    *a.offered.entry(t).or_insert(0) += n;
+                }
+                for (t, n) in b.dropped {
+                    *a.dropped.entry(t).or_insert(0) += n;
+                }
+                Some(a)
+            }
+            (a, b) => a.or(b),
+        };
+        all.metadata.extend(p.metadata);
+        all.segments.extend(p.segments);
+    }
+    if all.segments.len() > 1 {
+        let torn: Vec<String> = all
+            .segments
+            .iter()
+            .filter_map(|(p, e)| {
+                e.truncation
+                    .as_ref()
+                    .map(|t| format!("{}: {t}", p.display()))
+            })
+            .collect();
+        all.end = ScanEnd {
+            complete: all.segments.iter().all(|(_, e)| e.complete),
+            truncation: (!torn.is_empty()).then(|| torn.join("; ")),
+        };
+    }
+    Ok(all)
+}
+
+fn info_one(path: &Path) -> Result<TraceInfo, RecorderError> {
     let mut topics: Vec<TopicInfo> = Vec::new();
     let mut by_id: HashMap<u16, usize> = HashMap::new();
     let mut metadata = BTreeMap::new();
@@ -278,12 +345,13 @@ pub fn info(path: &Path) -> Result<TraceInfo, RecorderError> {
     let end_ns = topics.iter().filter_map(|t| t.last_ns).max();
     Ok(TraceInfo {
         path: path.to_path_buf(),
-        end,
+        end: end.clone(),
         topics,
         start_ns,
         end_ns,
         drops,
         metadata,
+        segments: vec![(path.to_path_buf(), end)],
     })
 }
 
@@ -294,6 +362,17 @@ fn secs(ns: Option<u64>) -> String {
 impl fmt::Display for TraceInfo {
     fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
         writeln!(f, "file:     {}", self.path.display())?;
+        if self.segments.len() > 1 {
+            writeln!(f, "segments: {} (read as one run)", self.segments.len())?;
+            for (p, e) in &self.segments {
+                let status = match (&e.truncation, e.complete) {
+                    (None, true) => "finished".to_string(),
+                    (None, false) => "no footer".to_string(),
+                    (Some(t), _) => format!("truncated ({t})"),
+                };
+                writeln!(f, "  {}: {status}", p.display())?;
+            }
+        }
         match (&self.end.truncation, self.end.complete) {
             (None, true) => writeln!(f, "status:   finished")?,
             (None, false) => writeln!(f, "status:   no footer (not finished)")?,
@@ -376,45 +455,51 @@ fn flatten(v: &serde_json::Value) -> Vec<(String, String)> {
 /// Write the JSON messages of `topic` as CSV (`log_time_ns` then one column per flattened key,
 /// in first-seen order). Returns the number of rows. Two streaming passes, constant memory.
 pub fn export_csv(path: &Path, topic: &str, out: &mut dyn Write) -> Result<u64, RecorderError> {
-    let mut ids = Vec::new();
+    let files = files_of(path);
+    // Channel ids of `topic`, per segment (each segment numbers its channels itself).
+    let mut ids: Vec<Vec<u16>> = Vec::new();
     let mut encoding = None;
     let mut topics = Vec::new();
     let mut columns: Vec<String> = Vec::new();
     let mut col_index: HashMap<String, usize> = HashMap::new();
     let mut bad: Option<String> = None;
-    scan(path, |item| match item {
-        Item::Channel {
-            id,
-            topic: t,
-            encoding: e,
-            ..
-        } => {
-            // Channels are listed in the data and again in the summary section.
-            if !topics.iter().any(|x| x == t) {
-                topics.push(t.to_string());
+    for file in &files {
+        let mut seg_ids = Vec::new();
+        scan(file, |item| match item {
+            Item::Channel {
+                id,
+                topic: t,
+                encoding: e,
+                ..
+            } => {
+                // Channels are listed in the data and again in the summary section.
+                if !topics.iter().any(|x| x == t) {
+                    topics.push(t.to_string());
+                }
+                if t == topic {
+                    seg_ids.push(id);
+                    encoding = Some(e.to_string());
+                }
             }
-            if t == topic {
-                ids.push(id);
-                encoding = Some(e.to_string());
-            }
-        }
-        Item::Message { channel, data, .. } if ids.contains(&channel) => {
-            match serde_json::from_slice::<serde_json::Value>(data) {
-                Ok(v) => {
-                    for (k, _) in flatten(&v) {
-                        if !col_index.contains_key(&k) {
-                            col_index.insert(k.clone(), columns.len());
-                            columns.push(k);
+            Item::Message { channel, data, .. } if seg_ids.contains(&channel) => {
+                match serde_json::from_slice::<serde_json::Value>(data) {
+                    Ok(v) => {
+                        for (k, _) in flatten(&v) {
+                            if !col_index.contains_key(&k) {
+                                col_index.insert(k.clone(), columns.len());
+                                columns.push(k);
+                            }
                         }
                     }
-                }
-                Err(e) => {
-                    bad.get_or_insert(format!("message is not JSON: {e}"));
+                    Err(e) => {
+                        bad.get_or_insert(format!("message is not JSON: {e}"));
+                    }
                 }
             }
-        }
-        _ => {}
-    })?;
+            _ => {}
+        })?;
+        ids.push(seg_ids);
+    }
     match encoding.as_deref() {
         None => {
             return Err(read_err(
@@ -440,31 +525,33 @@ pub fn export_csv(path: &Path, topic: &str, out: &mut dyn Write) -> Result<u64, 
     let mut rows = 0u64;
     let mut failed = None;
     let mut row = vec![String::new(); columns.len() + 1];
-    scan(path, |item| {
-        if let Item::Message {
-            channel,
-            log_time,
-            data,
-        } = item
-            && ids.contains(&channel)
-            && failed.is_none()
-        {
-            let Ok(v) = serde_json::from_slice::<serde_json::Value>(data) else {
-                return;
-            };
-            row.iter_mut().for_each(String::clear);
-            row[0] = log_time.to_string();
-            for (k, x) in flatten(&v) {
-                if let Some(&i) = col_index.get(&k) {
-                    row[i + 1] = x;
+    for (file, seg_ids) in files.iter().zip(&ids) {
+        scan(file, |item| {
+            if let Item::Message {
+                channel,
+                log_time,
+                data,
+            } = item
+                && seg_ids.contains(&channel)
+                && failed.is_none()
+            {
+                let Ok(v) = serde_json::from_slice::<serde_json::Value>(data) else {
+                    return;
+                };
+                row.iter_mut().for_each(String::clear);
+                row[0] = log_time.to_string();
+                for (k, x) in flatten(&v) {
+                    if let Some(&i) = col_index.get(&k) {
+                        row[i + 1] = x;
+                    }
                 }
+                if let Err(e) = csv.write_record(&row) {
+                    failed = Some(e);
+                }
+                rows += 1;
             }
-            if let Err(e) = csv.write_record(&row) {
-                failed = Some(e);
-            }
-            rows += 1;
-        }
-    })?;
+        })?;
+    }
     if let Some(e) = failed {
         return Err(csv_err(e));
     }

@@ -20,8 +20,16 @@
 //! # Crash safety
 //! Chunks are bounded by size (`chunk_size_kb`) and by age (`flush_interval_s`): the writer
 //! finishes and flushes a chunk once it is older than the interval, so after SIGKILL everything up
-//! to the last completed chunk reads back (`inspect` reads truncated files). On SIGINT/SIGTERM
-//! the host calls [`Recorder::finish`]; dropping the [`Recorder`] finishes the file too.
+//! to the last completed chunk reads back (`inspect` reads truncated files), and
+//! [`recover::recover`] (`vpsom trace recover IN OUT`) turns such a file into a finished, indexed
+//! MCAP. On SIGINT/SIGTERM the host calls [`Recorder::finish`]; dropping the [`Recorder`]
+//! finishes the file too.
+//!
+//! # Segments: a restarted recorder never truncates
+//! [`Recorder::create`] starts a new run (truncating `trace.mcap`); [`Recorder::resume`] is what a
+//! recorder node restarted within a run calls: it recovers the torn last segment in place and
+//! continues in `trace.1.mcap`, `trace.2.mcap`, ... (see [`recover`]). `inspect::info` and
+//! `inspect::export_csv` read all segments of a run as one.
 //!
 //! # Encoding: JSON + JSON Schema for everything, also the Foxglove well-known schemas
 //! Every channel uses message encoding `json` and schema encoding `jsonschema`. For the Foxglove
@@ -58,6 +66,7 @@
 
 mod convert;
 pub mod inspect;
+pub mod recover;
 pub mod schemas;
 mod writer;
 
@@ -664,15 +673,50 @@ pub struct Recorder {
     handle: RecorderHandle,
     thread: Option<JoinHandle<Result<RecorderSummary, RecorderError>>>,
     path: PathBuf,
+    recovered: Option<(PathBuf, recover::Recovery)>,
 }
 
 impl Recorder {
-    /// Create `path` (truncating it), write the header, schemas, channels and the static
-    /// `setup`, and start the writer thread.
+    /// Create `path` (truncating it) as the first segment of a new run, removing the later
+    /// segments of an earlier run there (`trace.1.mcap`, ...: they would be read as this run's),
+    /// write the header, schemas, channels and the static `setup`, and start the writer thread.
     pub fn create(
         path: &Path,
         cfg: &RecorderConfig,
         setup: RecorderSetup,
+    ) -> Result<Recorder, RecorderError> {
+        recover::remove_later_segments(path).map_err(|source| RecorderError::Create {
+            path: path.to_path_buf(),
+            source,
+        })?;
+        Self::start(path, cfg, setup, None)
+    }
+
+    /// Continue the run whose first segment is `first`, as a restarted recorder does: nothing an
+    /// earlier instance wrote is truncated. With no segment yet this is [`Recorder::create`];
+    /// otherwise the last segment is recovered in place if it is torn (no footer: its recorder
+    /// was killed) and recording continues in the next segment (`trace.k.mcap`, see
+    /// [`recover`]'s module docs). [`Recorder::path`] is the segment being written,
+    /// [`Recorder::recovered`] what the recovery kept.
+    pub fn resume(
+        first: &Path,
+        cfg: &RecorderConfig,
+        setup: RecorderSetup,
+    ) -> Result<Recorder, RecorderError> {
+        let existing = recover::segments(first);
+        let Some(last) = existing.last() else {
+            return Self::start(first, cfg, setup, None);
+        };
+        let recovered = recover::recover_in_place(last)?.map(|r| (last.clone(), r));
+        let next = recover::segment_path(first, existing.len());
+        Self::start(&next, cfg, setup, recovered)
+    }
+
+    fn start(
+        path: &Path,
+        cfg: &RecorderConfig,
+        setup: RecorderSetup,
+        recovered: Option<(PathBuf, recover::Recovery)>,
     ) -> Result<Recorder, RecorderError> {
         let (tx, rx): (Sender<Msg>, Receiver<Msg>) = crossbeam::channel::bounded(cfg.queue_len);
         let (wake, wake_rx) = crossbeam::channel::bounded(1);
@@ -693,7 +737,13 @@ impl Recorder {
             handle: RecorderHandle { tx, wake, shared },
             thread: Some(thread),
             path: path.to_path_buf(),
+            recovered,
         })
+    }
+
+    /// The torn segment [`Recorder::resume`] recovered before starting, and what it kept.
+    pub fn recovered(&self) -> Option<&(PathBuf, recover::Recovery)> {
+        self.recovered.as_ref()
     }
 
     /// A producer handle (clone it freely).

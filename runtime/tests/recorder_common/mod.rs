@@ -280,3 +280,34 @@ pub fn python_check(path: &Path, expect: &BTreeMap<String, u64>) {
         serde_json::from_str(stdout.trim()).expect("check_mcap.py prints counts as JSON");
     assert_eq!(&counts, expect, "python counts");
 }
+
+/// Messages per topic read through the file's index (summary section → chunk indexes → chunks),
+/// as an indexed reader does: a file without a summary (not finished) is an error.
+pub fn indexed_counts(path: &Path) -> Result<BTreeMap<String, u64>, String> {
+    let bytes = std::fs::read(path).map_err(|e| e.to_string())?;
+    let summary = mcap::Summary::read(&bytes)
+        .map_err(|e| e.to_string())?
+        .ok_or("no summary section")?;
+    if summary.chunk_indexes.is_empty() {
+        return Err("no chunk index".into());
+    }
+    let mut c = BTreeMap::new();
+    for index in &summary.chunk_indexes {
+        for m in summary
+            .stream_chunk(&bytes, index)
+            .map_err(|e| e.to_string())?
+        {
+            let m = m.map_err(|e| e.to_string())?;
+            *c.entry(m.channel.topic.clone()).or_insert(0) += 1;
+        }
+    }
+    let total: u64 = c.values().sum();
+    let stats = summary.stats.ok_or("no statistics")?;
+    if stats.message_count != total {
+        return Err(format!(
+            "statistics say {} messages, the index gives {total}",
+            stats.message_count
+        ));
+    }
+    Ok(c)
+}

@@ -94,6 +94,12 @@ pub fn run(args: &RunArgs, cfg: &Config, exe: &Path) -> anyhow::Result<RunOutcom
     let outcome_file = args.out.join(super::planner::OUTCOME_FILE);
     // A file left by an earlier run in the same directory must not be read as this run's.
     let _ = std::fs::remove_file(&outcome_file);
+    // Likewise an earlier run's trace segments: the recorder continues a run's segments when
+    // it is restarted, so a new run starts from none.
+    let trace = args.out.join("trace.mcap");
+    for seg in runtime::recorder::recover::segments(&trace).iter().rev() {
+        std::fs::remove_file(seg).with_context(|| format!("removing {}", seg.display()))?;
+    }
     let mut launcher = Launcher::new(
         &format!("launcher-{}", args.namespace),
         &runtime::ports::iceoryx2_config(),
