@@ -1,6 +1,15 @@
 //! The MCAP recorder: every topic of a session into one file that Foxglove and any MCAP tool can
 //! open.
 //!
+//! | file | what |
+//! |---|---|
+//! | `mod.rs` | [`Recorder`], [`RecorderHandle`], config, drop counting |
+//! | `writer.rs` | the writer thread: chunks, flushing, stats |
+//! | `convert.rs` | messages → JSON of their schemas |
+//! | `schemas.rs` | topics and their JSON Schemas |
+//! | `inspect.rs` | reading traces back: `info`, CSV export (all segments of a run) |
+//! | `recover.rs` | torn-file recovery and the run's segments |
+//!
 //! # Threading
 //! [`Recorder::create`] opens the file and starts one named writer thread (`recorder`) that owns
 //! the [`mcap::Writer`]. Producers hold a cloneable [`RecorderHandle`] whose `record_*` methods

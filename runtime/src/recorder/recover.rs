@@ -28,6 +28,7 @@
 use super::RecorderError;
 use mcap::records::{MessageHeader, Record};
 use mcap::sans_io::linear_reader::{LinearReadEvent, LinearReader, LinearReaderOptions};
+use std::collections::hash_map::Entry;
 use std::collections::{BTreeMap, HashMap};
 use std::fmt;
 use std::io::{BufWriter, Read};
@@ -148,15 +149,15 @@ pub fn recover(input: &Path, output: &Path) -> Result<Recovery, RecorderError> {
                 };
                 match rec {
                     Record::Schema { header, data } => {
-                        if !schemas.contains_key(&header.id) {
-                            let id = w
-                                .add_schema(&header.name, &header.encoding, &data)
-                                .map_err(mcap_err)?;
-                            schemas.insert(header.id, id);
+                        if let Entry::Vacant(slot) = schemas.entry(header.id) {
+                            slot.insert(
+                                w.add_schema(&header.name, &header.encoding, &data)
+                                    .map_err(mcap_err)?,
+                            );
                         }
                     }
                     Record::Channel(c) => {
-                        if !channels.contains_key(&c.id) {
+                        if let Entry::Vacant(slot) = channels.entry(c.id) {
                             // Schema id 0 means "no schema" in both files.
                             let sid = match c.schema_id {
                                 0 => 0,
@@ -170,7 +171,7 @@ pub fn recover(input: &Path, output: &Path) -> Result<Recovery, RecorderError> {
                             let id = w
                                 .add_channel(sid, &c.topic, &c.message_encoding, &c.metadata)
                                 .map_err(mcap_err)?;
-                            channels.insert(c.id, (id, c.topic));
+                            slot.insert((id, c.topic));
                         }
                     }
                     Record::Message { header, data } => {
