@@ -184,8 +184,10 @@ fn a_restarted_recorder_continues_in_a_new_segment() {
         }
     );
 
-    // Two segments, both finished and indexed (the first one by recovery).
+    // Two segments, both finished and indexed (the first one by the background recovery,
+    // which the restarted recorder waited for before it exited); no temporary file left.
     assert_eq!(segments(&dir), vec![first.clone(), second.clone()]);
+    assert!(!dir.join("trace.mcap.recovering").exists());
     for seg in [&first, &second] {
         let c = indexed_counts(seg).unwrap_or_else(|e| panic!("{}: {e}", seg.display()));
         assert!(c[topic::TF] >= 30, "{}: {c:?}", seg.display());
@@ -226,5 +228,68 @@ fn a_restarted_recorder_continues_in_a_new_segment() {
     assert_eq!(info(&first).unwrap().count(topic::TF), total);
     let mut csv = Vec::new();
     assert_eq!(export_csv(&first, topic::TF, &mut csv).unwrap(), total);
+    let _ = std::fs::remove_dir_all(&dir);
+}
+
+/// A finished trace cut to `keep` of its length: a torn file as SIGKILL leaves it (no summary,
+/// no footer, a partial chunk), with `n` states of which the first chunks are complete.
+fn torn_trace(path: &Path, n: u64, keep: f64) {
+    let cfg = RecorderConfig {
+        chunk_size_kb: 16,
+        ..Default::default()
+    };
+    let rec = Recorder::create(path, &cfg, RecorderSetup::default()).unwrap();
+    let h = rec.handle();
+    for i in 1..=n {
+        h.record_state(&state(i));
+    }
+    rec.finish().unwrap();
+    let len = std::fs::metadata(path).unwrap().len();
+    let f = std::fs::OpenOptions::new().write(true).open(path).unwrap();
+    f.set_len((len as f64 * keep) as u64).unwrap();
+}
+
+/// Two crashes in a row leave two torn segments: the third instance recovers both (not only the
+/// last) and the run reads as one; a new run (`create`) removes the old run's later segments.
+#[test]
+fn resume_recovers_every_torn_segment_and_create_starts_a_new_run() {
+    let dir = std::env::temp_dir().join(format!("vpsom-recorder-resume-{}", std::process::id()));
+    let _ = std::fs::remove_dir_all(&dir);
+    std::fs::create_dir_all(&dir).unwrap();
+    let first = dir.join("trace.mcap");
+    torn_trace(&first, 2000, 0.6);
+    torn_trace(&segment_path(&first, 1), 2000, 0.5);
+    // Each file alone (`info` of the first segment would read the whole run).
+    let torn: Vec<u64> = [0, 1]
+        .iter()
+        .map(|&k| {
+            let (msgs, end) = read_all(&segment_path(&first, k));
+            assert!(!end.complete, "{end:?}");
+            counts(&msgs)[topic::TF]
+        })
+        .collect();
+    assert!(torn.iter().all(|&n| n > 0 && n < 2000), "{torn:?}");
+
+    let mut rec =
+        Recorder::resume(&first, &RecorderConfig::default(), RecorderSetup::default()).unwrap();
+    assert_eq!(rec.path(), segment_path(&first, 2));
+    for i in 1..=10 {
+        rec.handle().record_state(&state(i));
+    }
+    let done = rec.wait_recovery();
+    assert_eq!(done.len(), 2);
+    for ((seg, r), n) in done.iter().zip(&torn) {
+        let r = r.as_ref().unwrap().as_ref().expect("torn, so recovered");
+        assert_eq!(r.per_topic[topic::TF], *n, "{}", seg.display());
+    }
+    rec.finish().unwrap();
+    let inf = info(&dir).unwrap();
+    assert_eq!(inf.segments.len(), 3);
+    assert!(inf.end.complete, "{inf}");
+    assert_eq!(inf.count(topic::TF), torn[0] + torn[1] + 10);
+
+    // A new run in the same directory starts from one segment again.
+    drop(Recorder::create(&first, &RecorderConfig::default(), RecorderSetup::default()).unwrap());
+    assert_eq!(segments(&dir), vec![first.clone()]);
     let _ = std::fs::remove_dir_all(&dir);
 }

@@ -36,8 +36,9 @@
 //!
 //! # Segments: a restarted recorder never truncates
 //! [`Recorder::create`] starts a new run (truncating `trace.mcap`); [`Recorder::resume`] is what a
-//! recorder node restarted within a run calls: it recovers the torn last segment in place and
-//! continues in `trace.1.mcap`, `trace.2.mcap`, ... (see [`recover`]). `inspect::info` and
+//! recorder node restarted within a run calls: it continues at once in `trace.1.mcap`,
+//! `trace.2.mcap`, ... and recovers the torn earlier segments in place on a background thread
+//! (see [`recover`]). `inspect::info` and
 //! `inspect::export_csv` read all segments of a run as one.
 //!
 //! # Encoding: JSON + JSON Schema for everything, also the Foxglove well-known schemas
@@ -682,8 +683,14 @@ pub struct Recorder {
     handle: RecorderHandle,
     thread: Option<JoinHandle<Result<RecorderSummary, RecorderError>>>,
     path: PathBuf,
-    recovered: Option<(PathBuf, recover::Recovery)>,
+    /// Recovery of the earlier segments, on a background thread ([`Recorder::resume`]).
+    recovery: Option<JoinHandle<Vec<RecoveredSegment>>>,
+    recovered: Vec<RecoveredSegment>,
 }
+
+/// One earlier segment [`Recorder::resume`] looked at: what recovery kept (`Ok(None)`: it was
+/// finished, left alone), or why it failed.
+pub type RecoveredSegment = (PathBuf, Result<Option<recover::Recovery>, RecorderError>);
 
 impl Recorder {
     /// Create `path` (truncating it) as the first segment of a new run, removing the later
@@ -698,34 +705,72 @@ impl Recorder {
             path: path.to_path_buf(),
             source,
         })?;
-        Self::start(path, cfg, setup, None)
+        Self::start(path, cfg, setup)
     }
 
     /// Continue the run whose first segment is `first`, as a restarted recorder does: nothing an
     /// earlier instance wrote is truncated. With no segment yet this is [`Recorder::create`];
-    /// otherwise the last segment is recovered in place if it is torn (no footer: its recorder
-    /// was killed) and recording continues in the next segment (`trace.k.mcap`, see
-    /// [`recover`]'s module docs). [`Recorder::path`] is the segment being written,
-    /// [`Recorder::recovered`] what the recovery kept.
+    /// otherwise recording starts at once in the next segment (`trace.k.mcap`, see [`recover`]'s
+    /// module docs), and a background thread at nice 19 recovers every earlier segment that is
+    /// torn (no footer: its recorder was killed) in place, so the restart loses no more than the
+    /// torn chunk while the recovery runs. [`Recorder::path`] is the segment being written;
+    /// [`Recorder::wait_recovery`] waits for the recovery, [`Recorder::finish`] too.
     pub fn resume(
         first: &Path,
         cfg: &RecorderConfig,
         setup: RecorderSetup,
     ) -> Result<Recorder, RecorderError> {
         let existing = recover::segments(first);
-        let Some(last) = existing.last() else {
-            return Self::start(first, cfg, setup, None);
-        };
-        let recovered = recover::recover_in_place(last)?.map(|r| (last.clone(), r));
-        let next = recover::segment_path(first, existing.len());
-        Self::start(&next, cfg, setup, recovered)
+        if existing.is_empty() {
+            return Self::start(first, cfg, setup);
+        }
+        let mut rec = Self::start(&recover::segment_path(first, existing.len()), cfg, setup)?;
+        let thread = std::thread::Builder::new()
+            .name("recorder-recover".into())
+            .spawn(move || {
+                // Best effort: recovery is bulk work beside the nodes.
+                let _ = crate::os::set_nice(19);
+                existing
+                    .into_iter()
+                    .map(|seg| {
+                        let r = recover::recover_in_place(&seg);
+                        match &r {
+                            Ok(Some(r)) => eprintln!("recorder: recovered {} ({r})", seg.display()),
+                            Ok(None) => {}
+                            Err(e) => eprintln!("recorder: cannot recover {}: {e}", seg.display()),
+                        }
+                        (seg, r)
+                    })
+                    .collect()
+            })
+            .map_err(RecorderError::Spawn)?;
+        rec.recovery = Some(thread);
+        Ok(rec)
+    }
+
+    /// Wait until [`Recorder::resume`]'s recovery of the earlier segments is done, and return
+    /// what it did per segment (empty after [`Recorder::create`]).
+    pub fn wait_recovery(&mut self) -> &[RecoveredSegment] {
+        if let Some(t) = self.recovery.take() {
+            match t.join() {
+                Ok(r) => self.recovered = r,
+                Err(_) => {
+                    self.recovered = vec![(
+                        self.path.clone(),
+                        Err(RecorderError::Panicked {
+                            path: self.path.clone(),
+                        }),
+                    )]
+                }
+            }
+        }
+        &self.recovered
     }
 
     fn start(
         path: &Path,
         cfg: &RecorderConfig,
         setup: RecorderSetup,
-        recovered: Option<(PathBuf, recover::Recovery)>,
     ) -> Result<Recorder, RecorderError> {
         let (tx, rx): (Sender<Msg>, Receiver<Msg>) = crossbeam::channel::bounded(cfg.queue_len);
         let (wake, wake_rx) = crossbeam::channel::bounded(1);
@@ -746,13 +791,9 @@ impl Recorder {
             handle: RecorderHandle { tx, wake, shared },
             thread: Some(thread),
             path: path.to_path_buf(),
-            recovered,
+            recovery: None,
+            recovered: Vec::new(),
         })
-    }
-
-    /// The torn segment [`Recorder::resume`] recovered before starting, and what it kept.
-    pub fn recovered(&self) -> Option<&(PathBuf, recover::Recovery)> {
-        self.recovered.as_ref()
     }
 
     /// A producer handle (clone it freely).
@@ -772,6 +813,8 @@ impl Recorder {
     }
 
     fn finish_inner(&mut self) -> Result<RecorderSummary, RecorderError> {
+        // The earlier segments are recovered before the run ends (errors were printed).
+        self.wait_recovery();
         let Some(thread) = self.thread.take() else {
             return Ok(RecorderSummary::default());
         };

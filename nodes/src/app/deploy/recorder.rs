@@ -71,16 +71,9 @@ impl RecorderHost {
         let scene = Scene::builtin_or_load(&args.scene)?;
         let setup = recorder_setup(&scene, cfg);
         std::fs::create_dir_all(&args.out)?;
-        // Restarted within a run: recover the torn segment, continue in the next one (the
-        // launcher removed an earlier run's segments at start).
+        // Restarted within a run: continue in the next segment; the torn one is recovered in
+        // the background (the launcher removed an earlier run's segments at start).
         let rec = Recorder::resume(&args.out.join("trace.mcap"), &cfg.recorder, setup)?;
-        if let Some((torn, r)) = rec.recovered() {
-            eprintln!(
-                "recorder: recovered {} ({r}); continuing in {}",
-                torn.display(),
-                rec.path().display()
-            );
-        }
         let h = rec.handle();
         let ctx = PortContext::with_namespace(&cfg.ports, "recorder", &args.namespace)?;
         Ok(Self {
