@@ -71,9 +71,10 @@ enum Command {
 
 #[derive(Debug, Clone, Args)]
 struct SessionArgs {
-    /// Scene: a built-in name (paper-scene-1, -2, -3) or a scene file.
-    #[arg(long, default_value = "paper-scene-1")]
-    scene: String,
+    /// Scene: a built-in name (paper-scene-1, -2, -3) or a scene file (default: `[sim] scene`
+    /// when the sim runs; without the sim, none, and nothing is scored against ground truth).
+    #[arg(long)]
+    scene: Option<String>,
     /// View planner: vpsom | coverage | frontier (or vpsom-no-<term> for an ablation).
     #[arg(long, default_value = "vpsom")]
     planner: String,
@@ -108,6 +109,11 @@ struct RunCmd {
         conflicts_with = "lockstep"
     )]
     gbv_load: usize,
+    /// Start only these nodes (comma list of sim, mapper, planner, recorder; default all).
+    /// Inputs none of them publishes must come from outside (a robot's drivers, see
+    /// `shm_types/include/vpsom_topics.h`); the run reports which have no publisher yet.
+    #[arg(long, value_delimiter = ',', conflicts_with = "lockstep")]
+    nodes: Vec<String>,
 }
 
 #[derive(Debug, Args)]
@@ -207,7 +213,7 @@ fn main() -> ExitCode {
     let config = cli.config.clone();
     let command = cli.command.unwrap_or(Command::Run(RunCmd {
         session: SessionArgs {
-            scene: "paper-scene-1".into(),
+            scene: None,
             planner: "vpsom".into(),
             seed: 1,
         },
@@ -216,6 +222,7 @@ fn main() -> ExitCode {
         ns: None,
         lockstep: false,
         gbv_load: 0,
+        nodes: Vec::new(),
     }));
     let result = match command {
         Command::Run(cmd) => run(config, cmd),
@@ -259,7 +266,16 @@ fn load_scene(name: &str) -> anyhow::Result<Scene> {
 fn run(config: Option<PathBuf>, cmd: RunCmd) -> anyhow::Result<ExitCode> {
     let (base, from) = Config::load_or_default(config.as_deref())?;
     let s = &cmd.session;
-    let scene = load_scene(&s.scene)?;
+    let nodes = deploy::parse_nodes(&cmd.nodes).map_err(anyhow::Error::msg)?;
+    // The sim needs a scene (`[sim] scene` by default); without it, a scene is only named to
+    // score the map against.
+    let scene_name = match &s.scene {
+        Some(name) => Some(name.clone()),
+        None if cmd.lockstep || nodes.contains(&"sim") => Some(base.sim.scene.clone()),
+        None => None,
+    };
+    let scene = scene_name.as_deref().map(load_scene).transpose()?;
+    let scene_label = scene.as_ref().map_or("none", |sc| sc.name.as_str());
     let cfg = deploy::run_config(&base, &s.planner)?;
     let time_scale = cmd.time_scale.unwrap_or(cfg.run.time_scale);
     anyhow::ensure!(
@@ -268,14 +284,14 @@ fn run(config: Option<PathBuf>, cmd: RunCmd) -> anyhow::Result<ExitCode> {
     );
     let out = cmd
         .out
-        .unwrap_or_else(|| PathBuf::from(format!("out/{}-{}-{}", scene.name, s.planner, s.seed)));
+        .unwrap_or_else(|| PathBuf::from(format!("out/{scene_label}-{}-{}", s.planner, s.seed)));
     let ns = cmd
         .ns
         .unwrap_or_else(|| format!("run{}", std::process::id()));
     eprintln!(
         "vpsom run: scene {} | planner {} | seed {} | camera {}x{} at {} Hz | time scale {} | \
-         config {} | out {}{}",
-        scene.name,
+         config {} | out {}{}{}",
+        scene_label,
         s.planner,
         s.seed,
         cfg.camera.width,
@@ -285,12 +301,17 @@ fn run(config: Option<PathBuf>, cmd: RunCmd) -> anyhow::Result<ExitCode> {
         from.display(),
         out.display(),
         if cmd.lockstep { " | lockstep" } else { "" },
+        if nodes.len() < deploy::ROLES.len() {
+            format!(" | nodes {}", nodes.join(","))
+        } else {
+            String::new()
+        },
     );
     std::fs::create_dir_all(&out)
         .with_context(|| format!("creating output directory {}", out.display()))?;
-    let metrics = if cmd.lockstep {
+    if cmd.lockstep {
         let spec = lockstep::SessionSpec {
-            scene,
+            scene: scene.context("lockstep runs simulate a scene")?,
             config: cfg.clone(),
             seed: s.seed,
             label: s.planner.clone(),
@@ -305,10 +326,10 @@ fn run(config: Option<PathBuf>, cmd: RunCmd) -> anyhow::Result<ExitCode> {
         })?;
         eprintln!();
         lockstep::write_outputs(&spec, &r, &out)?;
-        r.metrics
+        print_metrics(&r.metrics);
     } else {
         let args = deploy::RunArgs {
-            scene: s.scene.clone(),
+            scene: scene_name,
             planner: s.planner.clone(),
             seed: s.seed,
             time_scale,
@@ -316,16 +337,18 @@ fn run(config: Option<PathBuf>, cmd: RunCmd) -> anyhow::Result<ExitCode> {
             out: out.clone(),
             config_file: config,
             gbv_load: cmd.gbv_load,
+            nodes,
         };
         let exe = std::env::current_exe().context("locating the vpsom executable")?;
         let outcome = deploy::run(&args, &cfg, &exe)?;
+        match &outcome.metrics {
+            Some(m) => print_metrics(m),
+            None => print!("{}", outcome.unscored_summary()),
+        }
         if outcome.failed {
-            print_metrics(&outcome.metrics);
             anyhow::bail!("{}; outputs saved in {}", outcome.reason, out.display());
         }
-        outcome.metrics
-    };
-    print_metrics(&metrics);
+    }
     println!("outputs: {}", out.display());
     Ok(ExitCode::SUCCESS)
 }
@@ -590,6 +613,7 @@ fn node(
         out,
         config_file: config,
         gbv_load,
+        nodes: vec![],
     };
     match role {
         "sim" => deploy::sim_node(&args, &cfg)?,

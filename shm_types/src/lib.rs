@@ -17,6 +17,40 @@
 //! with [`boxed_zeroed`] without building it on the stack). The large frame types also implement
 //! [`AnyBitPattern`], which lets a producer that overwrites every field it publishes skip that
 //! fill ([`init_reused`]).
+//!
+//! # Files
+//! | file | content |
+//! |---|---|
+//! | `messages.rs` | the message types, their capacities and enum values, `validate()` |
+//! | `message.rs` | [`Message`], [`init_zeroed`], [`init_reused`] |
+//! | `validate.rs` | [`Validate`], [`ValidationError`] |
+//! | `classes.rs` | the COCO class table |
+//! | `contract/` | [`contract`]: every topic's service name, type name, size, alignment, field offsets and units, and the generated C header and Python module |
+//! | `include/vpsom_topics.h`, `python/vpsom_topics.py` | generated from [`contract`], committed |
+//!
+//! # Publishing from C, C++ or Python (the topic contract)
+//! A robot's drivers (camera SDK, detector, base controller) can publish straight into a run's
+//! shared memory with iceoryx2's own C, C++ or Python bindings (0.10, the version in
+//! `Cargo.lock`). [`contract`] describes every topic; two files generated from it are committed
+//! and checked against the Rust layout by `tests/contract.rs` (`gcc` compiles the header's
+//! `_Static_assert`s, `python3` compares the `ctypes` offsets):
+//! - C/C++: `#include "vpsom_topics.h"` (`shm_types/include/`). Structs are `vpsom_<Name>`,
+//!   services `VPSOM_SERVICE("<namespace>", VPSOM_TOPIC_DEPTH)`, type names
+//!   `VPSOM_TYPE_NAME_DEPTH_FRAME`; in C++ each struct carries `IOX2_TYPE_NAME`, so
+//!   `service_builder(name).publish_subscribe<vpsom_DepthFrame>()` opens our service as it is.
+//! - Python: `import vpsom_topics` (`shm_types/python/`), then
+//!   `node.service_builder(iox2.ServiceName.new(vpsom_topics.service_name(ns, "depth")))
+//!   .publish_subscribe(vpsom_topics.DepthFrame)`: the class's `type_name()` gives iceoryx2 the
+//!   type name, ctypes the size and alignment.
+//!
+//! What the service must match: payload type name `vpsom::<Name>`, `size_of`, `align_of`, no
+//! user header. Start `vpsom run` first and *open* the services (our nodes create them with the
+//! `[ports]` settings of `config/default.toml`; a service created first by a driver with
+//! iceoryx2's defaults may have smaller buffers than our subscribers ask for, and then our
+//! nodes cannot open it). After each send, notify the event service of the same name: our
+//! subscribers block on it between samples. Fill the [`Header`] (`seq` from 1, `stamp_ns` on
+//! `CLOCK_MONOTONIC`), keep every `reserved` byte 0, and expect a sample that fails
+//! [`Validate`] (NaN, counts past capacity, a non-unit quaternion) to be rejected and counted.
 
 // The workspace denies unsafe code; this crate is where it is the point: `ZeroCopySend`,
 // `ZeroValid` and `AnyBitPattern` are unsafe traits about the bytes of `#[repr(C)]` types, and
@@ -25,6 +59,7 @@
 #![allow(unsafe_code)]
 
 mod classes;
+pub mod contract;
 mod message;
 mod messages;
 mod validate;

@@ -1,5 +1,11 @@
 //! The message types. Field order is chosen so that `#[repr(C)]` leaves no hidden padding holes
 //! that differ between targets (sizes are pinned by tests at the bottom of this file).
+//!
+//! These layouts are a published contract: [`crate::contract`] describes them field by field
+//! (offsets read from these types) and generates the C header and Python module that drivers in
+//! other languages use. Changing a field here changes that contract: regenerate it
+//! (`UPDATE_CONTRACT=1 cargo test --release -p shm_types --test contract`) and add the field's
+//! unit to `contract/describe.rs` (the build fails until every field is listed there).
 
 use crate::validate::{Checker, Validate, ValidationError};
 use crate::{AnyBitPattern, ClassId, ZeroValid};

@@ -1,6 +1,13 @@
 //! The launcher: `vpsom run` starts the node processes (`vpsom node <role>`), watches them,
 //! shows a status line and scores the session from what it hears on the topics.
+//!
+//! With `--nodes` naming a subset (e.g. `mapper,planner,recorder`), only those start; the inputs
+//! they need that none of them publishes (without the sim: `depth`, `detections`, `robot/state`,
+//! `nav/grid`) must come from outside, and the launcher reports every few seconds which of them
+//! has no publisher yet ([`ExternalInputs`]). Without a scene there is no ground truth: the map is
+//! written, scoring is skipped and the outcome says so.
 
+use super::external::{self, ExternalInputs};
 use super::host;
 use crate::app::{lockstep, topics};
 use crate::config::Config;
@@ -21,8 +28,9 @@ use std::time::{Duration, Instant};
 /// Settings shared by the launcher and every node process of one run.
 #[derive(Debug, Clone)]
 pub struct RunArgs {
-    /// Scene: built-in name or file.
-    pub scene: String,
+    /// Scene: built-in name or file; `None` when no scene is given and the sim does not run
+    /// (sensors from outside: no ground truth, no scoring).
+    pub scene: Option<String>,
     /// Planner label (`vpsom`, `coverage`, `frontier`, `vpsom-no-<term>`).
     pub planner: String,
     /// Seed.
@@ -38,6 +46,8 @@ pub struct RunArgs {
     /// Deadline testing: keep the GBV pool saturated with this many extra candidate views
     /// (the planner host's GBV load, see [`planner_node`](super::planner_node)); 0 = off.
     pub gbv_load: usize,
+    /// The roles the launcher starts, in launch order (see [`external::parse_nodes`]).
+    pub nodes: Vec<&'static str>,
 }
 
 impl RunArgs {
@@ -45,8 +55,6 @@ impl RunArgs {
         let mut a = vec![
             "node".into(),
             role.into(),
-            "--scene".into(),
-            self.scene.clone(),
             "--planner".into(),
             self.planner.clone(),
             "--seed".into(),
@@ -60,6 +68,10 @@ impl RunArgs {
             "--gbv-load".into(),
             self.gbv_load.to_string(),
         ];
+        if let Some(scene) = &self.scene {
+            a.push("--scene".into());
+            a.push(scene.clone());
+        }
         if let Some(c) = &self.config_file {
             a.push("--config".into());
             a.push(c.display().to_string());
@@ -77,18 +89,45 @@ pub fn run_config(base: &Config, planner: &str) -> Result<Config, lockstep::Sess
 /// What a run produced.
 #[derive(Debug)]
 pub struct RunOutcome {
-    /// The metrics written to `metrics.json`.
-    pub metrics: eval::Metrics,
+    /// The metrics written to `metrics.json`; `None` when no scene was given (no ground truth
+    /// to score against: only `map.json` is written).
+    pub metrics: Option<eval::Metrics>,
+    /// Objects in the final map: `(all, foreground, complete foreground)`.
+    pub objects: (usize, usize, usize),
+    /// Samples the launcher saw on each input that came from outside the run.
+    pub external: Vec<(&'static str, u64)>,
     /// Why the run ended.
     pub reason: String,
     /// Whether a node failed for good.
     pub failed: bool,
 }
 
+impl RunOutcome {
+    /// The summary of a run without a scene (a Markdown table like the scored one): scoring
+    /// skipped, how it ended, the map, and the samples each external input sent.
+    pub fn unscored_summary(&self) -> String {
+        let mut t = String::from("| metric | value |\n|---|---|\n");
+        t += "| ground-truth scoring | skipped: no scene given (--scene names one) |\n";
+        t += &format!("| end | {} |\n", self.reason);
+        t += &format!(
+            "| objects mapped (foreground / complete) | {} ({} / {}) |\n",
+            self.objects.0, self.objects.1, self.objects.2
+        );
+        for (topic, n) in &self.external {
+            t += &format!("| samples received on {topic} (external) | {n} |\n");
+        }
+        t
+    }
+}
+
 /// `vpsom run`: launch the node processes, watch them, show a status line, score the session.
 pub fn run(args: &RunArgs, cfg: &Config, exe: &Path) -> anyhow::Result<RunOutcome> {
     let stop = host::stop_on_signals()?;
-    let scene = Scene::builtin_or_load(&args.scene)?;
+    let scene = args
+        .scene
+        .as_deref()
+        .map(Scene::builtin_or_load)
+        .transpose()?;
     std::fs::create_dir_all(&args.out)
         .with_context(|| format!("creating output directory {}", args.out.display()))?;
     let outcome_file = args.out.join(super::planner::OUTCOME_FILE);
@@ -118,7 +157,8 @@ pub fn run(args: &RunArgs, cfg: &Config, exe: &Path) -> anyhow::Result<RunOutcom
     let decisions = ctx.subscriber::<PlannerDecision>(topics::DECISION)?;
     let deadline = ctx.subscriber::<DeadlineEvent>(topics::DEADLINE)?;
     let nav = ctx.subscriber::<NavGoal>(topics::NAV_GOAL)?;
-    for role in ["recorder", "sim", "mapper", "planner"] {
+    let mut external = ExternalInputs::new(&ctx, &external::external_inputs(&args.nodes))?;
+    for &role in &args.nodes {
         launcher.spawn(ChildSpec {
             name: role.into(),
             program: exe.to_path_buf(),
@@ -135,6 +175,11 @@ pub fn run(args: &RunArgs, cfg: &Config, exe: &Path) -> anyhow::Result<RunOutcom
     let mut failed = false;
     let mut last_status = Instant::now();
     let max_sim_ns = (cfg.run.max_sim_s * 1e9) as u64;
+    let clock = if args.nodes.contains(&"sim") {
+        "sim"
+    } else {
+        "robot"
+    };
     let reason = loop {
         while let Some(s) = truth.receive()? {
             sim_ns = s.header.sim_time_ns;
@@ -160,6 +205,13 @@ pub fn run(args: &RunArgs, cfg: &Config, exe: &Path) -> anyhow::Result<RunOutcom
         }
         while let Some(g) = nav.receive()? {
             goal = Some(*g);
+        }
+        if let Some(line) = external.poll(Instant::now())? {
+            eprintln!("\n{line}");
+        }
+        if let Some(t) = external.robot_elapsed_ns() {
+            // No sim: the robot's clock is the run's.
+            sim_ns = sim_ns.max(t);
         }
         for ev in launcher.poll() {
             eprintln!("\n{ev}");
@@ -191,7 +243,7 @@ pub fn run(args: &RunArgs, cfg: &Config, exe: &Path) -> anyhow::Result<RunOutcom
             last_status = Instant::now();
             let objs = map.objects();
             eprint!(
-                "\r{:>5.0}s wall {:>6.1}s sim | objects {:>2} mapped, {:>2} complete | GBV {} | \
+                "\r{:>5.0}s wall {:>6.1}s {clock} | objects {:>2} mapped, {:>2} complete | GBV {} | \
                  LBV deadline misses {}/{}   ",
                 start.elapsed().as_secs_f64(),
                 sim_ns as f64 * 1e-9,
@@ -226,8 +278,17 @@ pub fn run(args: &RunArgs, cfg: &Config, exe: &Path) -> anyhow::Result<RunOutcom
     while let Some(v) = visibility.receive()? {
         log.observe_visibility(&v);
     }
-    log.add_deadline_misses(misses);
-    let terminated = final_state == Some(planner_state::TERMINATED);
+    let est = eval::estimates_from_map(&map);
+    let objects = (
+        map.objects().len(),
+        map.objects().iter().filter(|o| !o.is_background()).count(),
+        map.objects()
+            .iter()
+            .filter(|o| !o.is_background() && o.is_complete())
+            .count(),
+    );
+    // Count what the external inputs sent while the nodes stopped (the line is not news).
+    let _ = external.poll(Instant::now())?;
     // The planner's own account of its end (reason, explored, objects given up), if it left one.
     let outcome = std::fs::read(&outcome_file)
         .ok()
@@ -236,6 +297,19 @@ pub fn run(args: &RunArgs, cfg: &Config, exe: &Path) -> anyhow::Result<RunOutcom
         Some(o) if final_state.is_some() && !failed => format!("planner: {}", o.reason),
         _ => reason,
     };
+    // No scene, no ground truth: the map is written, nothing is scored.
+    let Some(scene) = scene else {
+        eval::MapFile::from_estimates("none", &est).write(&args.out.join(eval::MAP_FILE))?;
+        return Ok(RunOutcome {
+            metrics: None,
+            objects,
+            external: external.samples(),
+            reason,
+            failed,
+        });
+    };
+    log.add_deadline_misses(misses);
+    let terminated = final_state == Some(planner_state::TERMINATED);
     log.finish(sim_ns, terminated, &reason);
     if let Some(o) = outcome {
         log.planner_outcome(o.explored, o.objects_given_up);
@@ -246,12 +320,13 @@ pub fn run(args: &RunArgs, cfg: &Config, exe: &Path) -> anyhow::Result<RunOutcom
         seed: args.seed,
     };
     let gt = lockstep::ground_truth(&scene);
-    let est = eval::estimates_from_map(&map);
     let metrics = log.metrics(&run, &gt, &est, &MatchParams::default());
     let plot = log.plot_input(&run, lockstep::room(&scene), &gt, &est, &metrics);
     eval::write_run_outputs(&args.out, &metrics, &est, &plot)?;
     Ok(RunOutcome {
-        metrics,
+        metrics: Some(metrics),
+        objects,
+        external: external.samples(),
         reason,
         failed,
     })

@@ -1,5 +1,5 @@
-//! The deployment host: `vpsom run` launches the sim, mapper, planner and recorder as separate
-//! processes (`vpsom node <role>`) that talk through iceoryx2 shared memory on the real clock at
+//! The deployment host: `vpsom run` launches the sim, mapper, planner and recorder (or the
+//! subset `--nodes` names) as separate processes (`vpsom node <role>`) that talk through iceoryx2 shared memory on the real clock at
 //! fixed rates, watches them (exit status, iceoryx2 dead nodes, restarts), and scores the session
 //! from what it hears on the topics.
 //!
@@ -12,12 +12,14 @@
 //! | `planner` | [`planner_node`]: the LBV on the deadline-monitored executor, GBV rounds and the GBV load on the worker pool |
 //! | `recorder` | [`recorder_node`]: every topic to `trace.mcap`, polled; [`recorder_setup`] |
 //! | `launch` | [`run`]: launch, watch and score a run; [`RunArgs`], [`RunOutcome`], [`run_config`] |
+//! | `external` | `--nodes`: [`parse_nodes`], [`external_inputs`] (what must come from a robot's drivers), [`ExternalInputs`] (publisher watch and report) |
 //!
 //! Time: the sim advances `time_scale` simulated seconds per wall second; every rate in the
 //! configuration is in simulated time, so wall periods are divided by `time_scale`. Message
 //! headers carry both the producer's monotonic clock (`stamp_ns`, for latency) and the simulated
 //! time (`sim_time_ns`).
 
+mod external;
 pub mod host;
 mod launch;
 mod mapper;
@@ -25,6 +27,7 @@ mod planner;
 mod recorder;
 mod sim;
 
+pub use external::{ExternalInputs, REPORT_EVERY, ROLES, external_inputs, parse_nodes};
 pub use host::HostError;
 pub use launch::{RunArgs, RunOutcome, run, run_config};
 pub use mapper::mapper_node;

@@ -31,12 +31,7 @@ pub fn recorder_node(args: &RunArgs, cfg: &Config) -> Result<(), HostError> {
 pub fn recorder_setup(scene: &Scene, cfg: &Config) -> RecorderSetup {
     RecorderSetup {
         scene: scene.name.clone(),
-        mount: MountGeometry {
-            height: cfg.camera.mount.height,
-            forward_offset: cfg.camera.mount.forward_offset,
-            hfov_deg: cfg.camera.hfov_deg,
-            vfov_deg: cfg.camera.vfov_deg,
-        },
+        mount: mount(cfg),
         truth: scene
             .objects
             .iter()
@@ -48,6 +43,15 @@ pub fn recorder_setup(scene: &Scene, cfg: &Config) -> RecorderSetup {
                 yaw: o.yaw,
             })
             .collect(),
+    }
+}
+
+fn mount(cfg: &Config) -> MountGeometry {
+    MountGeometry {
+        height: cfg.camera.mount.height,
+        forward_offset: cfg.camera.mount.forward_offset,
+        hfov_deg: cfg.camera.hfov_deg,
+        vfov_deg: cfg.camera.vfov_deg,
     }
 }
 
@@ -68,8 +72,15 @@ struct RecorderHost {
 
 impl RecorderHost {
     fn new(args: &RunArgs, cfg: &Config) -> Result<Self, HostError> {
-        let scene = Scene::builtin_or_load(&args.scene)?;
-        let setup = recorder_setup(&scene, cfg);
+        let setup = match &args.scene {
+            Some(name) => recorder_setup(&Scene::builtin_or_load(name)?, cfg),
+            // Sensors from outside, no scene: nothing true to draw.
+            None => RecorderSetup {
+                scene: "none".into(),
+                mount: mount(cfg),
+                truth: Vec::new(),
+            },
+        };
         std::fs::create_dir_all(&args.out)?;
         // Restarted within a run: continue in the next segment; the torn one is recovered in
         // the background (the launcher removed an earlier run's segments at start).

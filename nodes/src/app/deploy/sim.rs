@@ -19,7 +19,7 @@ use std::sync::atomic::AtomicBool;
 /// nav/neck goals.
 pub fn sim_node(args: &RunArgs, cfg: &Config) -> Result<(), HostError> {
     let stop = host::stop_on_signals()?;
-    let scene = Scene::builtin_or_load(&args.scene)?;
+    let scene = Scene::builtin_or_load(args.scene.as_deref().unwrap_or(&cfg.sim.scene))?;
     let pace = Pace::Periodic(Periodic {
         thread: "sim",
         period: host::wall_period(cfg.rates.state_hz, args.time_scale),
