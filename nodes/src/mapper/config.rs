@@ -155,6 +155,12 @@ pub struct ExtensionsConfig {
     /// object was seen (under another label), not missed; foreground objects of any classes
     /// whose cuboids overlap with IoU ≥ `[mapper] cross_merge_iou` are one object (class by vote).
     pub cross_class: bool,
+    /// Label-agnostic association by place: a foreground detection of any class whose points'
+    /// centroid lies inside an existing foreground object's cuboid is tested against it like a
+    /// compatible one (joins it and votes for its class, or, refused, founds no object), and two
+    /// foreground objects of any classes that overlap as duplicates do (IoU ≥ `[mapper]
+    /// cross_merge_iou`, or the smaller one contained) are merged (class by score vote).
+    pub cross_class_join: bool,
 }
 
 impl Default for ExtensionsConfig {

@@ -419,8 +419,15 @@ impl Mapper {
             };
             voxel_centroids(pts, voxel, &mut self.voxel_scratch, &mut self.test_p);
             for (j, o) in self.objects.iter().enumerate() {
-                if o.background == fg || !self.groups.compatible(det.class_id, o.class_id) {
+                if o.background == fg {
                     continue;
+                }
+                let inside = o.contains(centroid, 0.0);
+                if !self.groups.compatible(det.class_id, o.class_id) {
+                    // Any foreground class at the object's place (cross_class_join).
+                    if !(fg && inside && self.cfg.extensions.cross_class_join) {
+                        continue;
+                    }
                 }
                 let m = a.gate_margin;
                 let centre_in_box =
@@ -428,7 +435,6 @@ impl Mapper {
                 if !o.contains(centroid, m) && !centre_in_box {
                     continue;
                 }
-                let inside = o.contains(centroid, 0.0);
                 o.visible_reference(
                     frame,
                     camera,
