@@ -4,7 +4,8 @@
 //! foreground objects of incompatible classes whose cuboids overlap with IoU ≥
 //! `[mapper] cross_merge_iou` are one object labelled two ways and are merged too (the class is
 //! the score vote of both). With `[mapper.extensions] cross_class_join`, foreground objects of
-//! any classes are duplicates by the same rules as compatible ones (IoU ≥ `cross_merge_iou`, or
+//! any classes whose centres each lie inside the other's cuboid (grown by `merge_margin`) are
+//! duplicates by the same rules as compatible ones (IoU ≥ `cross_merge_iou`, or
 //! the smaller one's centre inside the larger with ≥ `merge_containment` of it inside): a
 //! persistent label confusion or a false-positive box over a real object founds a wrong-label
 //! object at the real one's place, and the merged votes give the label.
@@ -48,6 +49,12 @@ impl Mapper {
                 let iou_dup = union > 0.0 && inter / union >= self.cfg.cross_merge_iou;
                 if !self.cfg.extensions.cross_class_join {
                     return self.cfg.extensions.cross_class && iou_dup;
+                }
+                // Each centre inside the other (grown by merge_margin): one place, not a
+                // neighbour inside a smeared cuboid.
+                let m = self.cfg.merge_margin;
+                if !(a.contains(cb.center, m) && b.contains(ca.center, m)) {
+                    return false;
                 }
                 if iou_dup {
                     return true;
