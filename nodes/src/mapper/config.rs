@@ -158,12 +158,15 @@ pub struct ExtensionsConfig {
     /// whose cuboids overlap with IoU ≥ `[mapper] cross_merge_iou` are one object (class by vote).
     pub cross_class: bool,
     /// Label-agnostic association by place: a foreground detection of any class whose points'
-    /// centroid lies inside an existing foreground object's cuboid, the object's centre inside the
-    /// points' bounding box, is tested against it like a compatible one (joins it and votes for
-    /// its class, or, refused, founds no object), and two foreground objects of any classes, each
-    /// centre inside the other, that overlap as duplicates do (IoU ≥ `[mapper] cross_merge_iou`,
+    /// centroid lies inside an existing foreground object's cuboid is tested against it like a
+    /// compatible one (joins it and votes for its class, or, refused, founds no object), and two
+    /// foreground objects of any classes that overlap as duplicates do (IoU ≥ `[mapper] cross_merge_iou`,
     /// or the smaller one contained) are merged (class by score vote).
     pub cross_class_join: bool,
+    /// With `cross_class_join`: an any-class join also needs the object's centre inside the
+    /// points' bounding box, and an any-class merge each object's centre inside the other's
+    /// cuboid (a neighbour inside a smeared cuboid is not swallowed).
+    pub cross_class_mutual: bool,
     /// Box-only detections of flat classes (class prior height ≤ `[mapper.flat] max_height`:
     /// a phone lies within the support plane's band and its dark surface drops out) take their
     /// points from the box's rays on the mapped table top under them ([`FlatConfig`]).

@@ -4,8 +4,8 @@
 //! foreground objects of incompatible classes whose cuboids overlap with IoU ≥
 //! `[mapper] cross_merge_iou` are one object labelled two ways and are merged too (the class is
 //! the score vote of both). With `[mapper.extensions] cross_class_join`, foreground objects of
-//! any classes whose centres each lie inside the other's cuboid (grown by `merge_margin`) are
-//! duplicates by the same rules as compatible ones (IoU ≥ `cross_merge_iou`, or
+//! any classes are duplicates by the same rules as compatible ones (with `cross_class_mutual`
+//! only when each centre lies inside the other's cuboid grown by `merge_margin`) (IoU ≥ `cross_merge_iou`, or
 //! the smaller one's centre inside the larger with ≥ `merge_containment` of it inside): a
 //! persistent label confusion or a false-positive box over a real object founds a wrong-label
 //! object at the real one's place, and the merged votes give the label.
@@ -50,10 +50,10 @@ impl Mapper {
                 if !self.cfg.extensions.cross_class_join {
                     return self.cfg.extensions.cross_class && iou_dup;
                 }
-                // Each centre inside the other (grown by merge_margin): one place, not a
-                // neighbour inside a smeared cuboid.
+                // cross_class_mutual: each centre inside the other (grown by merge_margin).
                 let m = self.cfg.merge_margin;
-                if !(a.contains(cb.center, m) && b.contains(ca.center, m)) {
+                let each_in_other = a.contains(cb.center, m) && b.contains(ca.center, m);
+                if self.cfg.extensions.cross_class_mutual && !each_in_other {
                     return false;
                 }
                 if iou_dup {

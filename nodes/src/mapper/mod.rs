@@ -436,10 +436,11 @@ impl Mapper {
                 let centre_in_box =
                     o.cuboid.center.cmpge(lo - m).all() && o.cuboid.center.cmple(hi + m).all();
                 if !self.groups.compatible(det.class_id, o.class_id) {
-                    // Any foreground class at the object's place (cross_class_join): each in
-                    // the other, so a neighbour inside a smeared cuboid is not swallowed.
-                    let join = self.cfg.extensions.cross_class_join;
-                    if !(fg && join && inside && centre_in_box) {
+                    // Any foreground class at the object's place (cross_class_join); with
+                    // cross_class_mutual also the object's centre in the points' box.
+                    let x = &self.cfg.extensions;
+                    let mutual = centre_in_box || !x.cross_class_mutual;
+                    if !(fg && x.cross_class_join && inside && mutual) {
                         continue;
                     }
                 }
