@@ -57,6 +57,8 @@ pub struct MapperConfig {
     pub cross_merge_iou: f32,
     /// Sparse fallback (`[mapper.extensions] sparse_fallback`).
     pub sparse: SparseConfig,
+    /// Flat objects (`[mapper.extensions] flat_objects`).
+    pub flat: FlatConfig,
     /// Association.
     pub association: AssociationConfig,
     /// Switches of the additions beyond the paper.
@@ -155,6 +157,20 @@ pub struct ExtensionsConfig {
     /// object was seen (under another label), not missed; foreground objects of any classes
     /// whose cuboids overlap with IoU ≥ `[mapper] cross_merge_iou` are one object (class by vote).
     pub cross_class: bool,
+    /// Label-agnostic association by place: a foreground detection of any class whose points'
+    /// centroid lies inside an existing foreground object's cuboid is tested against it like a
+    /// compatible one (joins it and votes for its class, or, refused, founds no object), and two
+    /// foreground objects of any classes that overlap as duplicates do (IoU ≥ `[mapper] cross_merge_iou`,
+    /// or the smaller one contained) are merged (class by score vote).
+    pub cross_class_join: bool,
+    /// With `cross_class_join`: an any-class join also needs the object's centre inside the
+    /// points' bounding box, and an any-class merge each object's centre inside the other's
+    /// cuboid (a neighbour inside a smeared cuboid is not swallowed).
+    pub cross_class_mutual: bool,
+    /// Box-only detections of flat classes (class prior height ≤ `[mapper.flat] max_height`:
+    /// a phone lies within the support plane's band and its dark surface drops out) take their
+    /// points from the box's rays on the mapped table top under them ([`FlatConfig`]).
+    pub flat_objects: bool,
 }
 
 impl Default for ExtensionsConfig {
@@ -223,6 +239,29 @@ pub struct SparseConfig {
     pub max_above_support: f32,
     /// The points' extent fits the class size prior at least this well ([`super::priors`]).
     pub min_prior_fit: f32,
+}
+
+/// `[mapper.flat]` section: flat objects lying on a mapped table top, located by their box.
+#[derive(Debug, Clone, Copy, PartialEq, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct FlatConfig {
+    /// Classes whose size prior is at most this high are flat, metres.
+    pub max_height: f32,
+    /// A box sample whose depth lies nearer than the table top along its ray by more than this
+    /// shows something standing there (not the flat object), metres.
+    pub stand_tolerance: f32,
+    /// At least this fraction of the box's samples must hit the table top (dropout or the
+    /// plane), else the box is not on a free table region.
+    pub min_on_plane: f32,
+    /// Box samples per detection at most.
+    pub max_samples: u32,
+}
+
+impl Default for FlatConfig {
+    /// The `[mapper.flat]` section of the built-in `config/default.toml`.
+    fn default() -> Self {
+        runtime::config::DEFAULTS.section("mapper.flat")
+    }
 }
 
 impl Default for SparseConfig {
@@ -402,6 +441,21 @@ impl MapperConfig {
             self.cross_merge_iou.into(),
             0.01,
             1.0,
+        )?;
+        let fl = &self.flat;
+        c.in_range("mapper.flat.max_height", fl.max_height.into(), 0.0, 0.2)?;
+        c.in_range(
+            "mapper.flat.stand_tolerance",
+            fl.stand_tolerance.into(),
+            0.001,
+            1.0,
+        )?;
+        c.in_range("mapper.flat.min_on_plane", fl.min_on_plane.into(), 0.0, 1.0)?;
+        c.count(
+            "mapper.flat.max_samples",
+            fl.max_samples as usize,
+            16,
+            100_000,
         )?;
         let sp = &self.sparse;
         c.count(

@@ -3,7 +3,12 @@
 //! overlapping cuboids) are merged into the older one. With `[mapper.extensions] cross_class`,
 //! foreground objects of incompatible classes whose cuboids overlap with IoU ≥
 //! `[mapper] cross_merge_iou` are one object labelled two ways and are merged too (the class is
-//! the score vote of both).
+//! the score vote of both). With `[mapper.extensions] cross_class_join`, foreground objects of
+//! any classes are duplicates by the same rules as compatible ones (with `cross_class_mutual`
+//! only when each centre lies inside the other's cuboid grown by `merge_margin`) (IoU ≥ `cross_merge_iou`, or
+//! the smaller one's centre inside the larger with ≥ `merge_containment` of it inside): a
+//! persistent label confusion or a false-positive box over a real object founds a wrong-label
+//! object at the real one's place, and the merged votes give the label.
 
 use super::points::rest_on_support;
 use super::{Mapper, cuboid};
@@ -25,28 +30,51 @@ impl Mapper {
         if ca.center.truncate().distance(cb.center.truncate()) > 0.5 * (ra + rb) {
             return false;
         }
-        let (inter, va, vb) = if a.background {
+        let (inter, va, vb, iou_min) = if a.background {
             if a.class_id != b.class_id {
                 return false;
             }
             let area = |c: &cuboid::Box3| c.size.x.max(0.0) * c.size.y.max(0.0);
-            (ca.footprint_intersection(cb), area(ca), area(cb))
+            (
+                ca.footprint_intersection(cb),
+                area(ca),
+                area(cb),
+                self.cfg.merge_iou,
+            )
         } else {
             if !self.groups.compatible(a.class_id, b.class_id) {
                 // One object labelled two ways (a confusion outside the look-alike groups).
                 let inter = ca.intersection_volume(cb);
                 let union = ca.volume() + cb.volume() - inter;
-                return self.cfg.extensions.cross_class
-                    && union > 0.0
-                    && inter / union >= self.cfg.cross_merge_iou;
+                let iou_dup = union > 0.0 && inter / union >= self.cfg.cross_merge_iou;
+                if !self.cfg.extensions.cross_class_join {
+                    return self.cfg.extensions.cross_class && iou_dup;
+                }
+                // cross_class_mutual: each centre inside the other (grown by merge_margin).
+                let m = self.cfg.merge_margin;
+                let each_in_other = a.contains(cb.center, m) && b.contains(ca.center, m);
+                if self.cfg.extensions.cross_class_mutual && !each_in_other {
+                    return false;
+                }
+                if iou_dup {
+                    return true;
+                }
+                // cross_class_join: also the containment rule below (no IoU rule).
+                (inter, ca.volume(), cb.volume(), f32::INFINITY)
+            } else {
+                (
+                    ca.intersection_volume(cb),
+                    ca.volume(),
+                    cb.volume(),
+                    self.cfg.merge_iou,
+                )
             }
-            (ca.intersection_volume(cb), ca.volume(), cb.volume())
         };
         if inter <= 0.0 {
             return false;
         }
         let union = va + vb - inter;
-        if union > 0.0 && inter / union >= self.cfg.merge_iou {
+        if union > 0.0 && inter / union >= iou_min {
             return true;
         }
         let (small, large, v_small) = if va <= vb { (a, b, va) } else { (b, a, vb) };

@@ -16,6 +16,7 @@
 //! | [`existence`] | existence log-odds: spurious objects are deleted |
 //! | `merge.rs` | duplicate merging |
 //! | `sparse.rs` | confident detections with few points (glass, far small objects) |
+//! | `flat.rs` | flat objects (phones) located by their box on the table top |
 //! | `publish.rs` | [`Mapper::write_map`], [`Mapper::write_grid`] |
 //! | [`grid`] | the exploration occupancy grid |
 //! | `mod.rs` | [`Mapper`]: the per-frame pipeline |
@@ -51,6 +52,7 @@ pub mod association;
 pub mod config;
 pub mod cuboid;
 pub mod existence;
+mod flat;
 pub mod grid;
 mod merge;
 pub mod object;
@@ -380,7 +382,7 @@ impl Mapper {
             let det = &dets[i];
             let fg = !is_background_class(det.class_id);
             let mut pts = std::mem::take(&mut self.det_points[i]);
-            let n = self.point_scratch.extract(
+            let mut n = self.point_scratch.extract(
                 frame,
                 labels,
                 camera,
@@ -391,6 +393,13 @@ impl Mapper {
                 &extract,
                 &mut pts,
             );
+            if extract.boxes
+                && fg
+                && self.cfg.extensions.flat_objects
+                && flat::is_flat(det.class_id, self.cfg.flat.max_height)
+            {
+                n = self.flat_points(frame, camera, pose, det, &mut pts);
+            }
             self.det_points[i] = pts;
             if n < self.cfg.min_points as usize
                 && !(extract.boxes && fg && self.sparse_ok(det, &self.det_points[i]))
@@ -419,16 +428,25 @@ impl Mapper {
             };
             voxel_centroids(pts, voxel, &mut self.voxel_scratch, &mut self.test_p);
             for (j, o) in self.objects.iter().enumerate() {
-                if o.background == fg || !self.groups.compatible(det.class_id, o.class_id) {
-                    continue;
-                }
-                let m = a.gate_margin;
-                let centre_in_box =
-                    o.cuboid.center.cmpge(lo - m).all() && o.cuboid.center.cmple(hi + m).all();
-                if !o.contains(centroid, m) && !centre_in_box {
+                if o.background == fg {
                     continue;
                 }
                 let inside = o.contains(centroid, 0.0);
+                let m = a.gate_margin;
+                let centre_in_box =
+                    o.cuboid.center.cmpge(lo - m).all() && o.cuboid.center.cmple(hi + m).all();
+                if !self.groups.compatible(det.class_id, o.class_id) {
+                    // Any foreground class at the object's place (cross_class_join); with
+                    // cross_class_mutual also the object's centre in the points' box.
+                    let x = &self.cfg.extensions;
+                    let mutual = centre_in_box || !x.cross_class_mutual;
+                    if !(fg && x.cross_class_join && inside && mutual) {
+                        continue;
+                    }
+                }
+                if !o.contains(centroid, m) && !centre_in_box {
+                    continue;
+                }
                 o.visible_reference(
                     frame,
                     camera,
