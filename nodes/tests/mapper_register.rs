@@ -56,7 +56,11 @@ fn mean_iou(registration: bool) -> f32 {
     }
     let mut sum = 0.0;
     let mut n = 0;
-    for shape in scene.objects.iter().filter(|o| !is_background_class(o.class_id)) {
+    for shape in scene
+        .objects
+        .iter()
+        .filter(|o| !is_background_class(o.class_id))
+    {
         let truth = Box3 {
             center: shape.cuboid.center,
             size: shape.cuboid.size,

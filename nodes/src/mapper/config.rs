@@ -678,18 +678,73 @@ impl MapperConfig {
         c.in_range("mapper.sopm.eps_sopm", s.eps_sopm.into(), 0.0, 1.0)?;
         c.in_range("mapper.sopm.visible_cos", s.visible_cos.into(), -1.0, 1.0)?;
         let r = &self.registration;
-        c.count("mapper.registration.iterations", r.iterations as usize, 1, 50)?;
-        c.in_range("mapper.registration.max_distance", r.max_distance.into(), 0.002, 0.5)?;
+        c.count(
+            "mapper.registration.iterations",
+            r.iterations as usize,
+            1,
+            50,
+        )?;
+        c.in_range(
+            "mapper.registration.max_distance",
+            r.max_distance.into(),
+            0.002,
+            0.5,
+        )?;
         c.in_range("mapper.registration.trim", r.trim.into(), 0.1, 1.0)?;
-        c.in_range("mapper.registration.min_overlap", r.min_overlap.into(), 0.0, 1.0)?;
-        c.count("mapper.registration.min_correspondences", r.min_correspondences as usize, 3, 1_000_000)?;
-        c.count("mapper.registration.min_object_observations", r.min_object_observations as usize, 1, 1000)?;
-        c.count("mapper.registration.max_points_per_detection", r.max_points_per_detection as usize, 10, 1_000_000)?;
-        c.in_range("mapper.registration.max_translation", r.max_translation.into(), 0.0, 1.0)?;
-        c.in_range("mapper.registration.max_yaw_deg", r.max_yaw_deg.into(), 0.0, 20.0)?;
-        c.in_range("mapper.registration.yaw_min_spread", r.yaw_min_spread.into(), 0.0, 10.0)?;
-        c.in_range("mapper.registration.persist_gain", r.persist_gain.into(), 0.0, 1.0)?;
-        c.in_range("mapper.registration.persist_decay", r.persist_decay.into(), 0.0, 1.0)?;
+        c.in_range(
+            "mapper.registration.min_overlap",
+            r.min_overlap.into(),
+            0.0,
+            1.0,
+        )?;
+        c.count(
+            "mapper.registration.min_correspondences",
+            r.min_correspondences as usize,
+            3,
+            1_000_000,
+        )?;
+        c.count(
+            "mapper.registration.min_object_observations",
+            r.min_object_observations as usize,
+            1,
+            1000,
+        )?;
+        c.count(
+            "mapper.registration.max_points_per_detection",
+            r.max_points_per_detection as usize,
+            10,
+            1_000_000,
+        )?;
+        c.in_range(
+            "mapper.registration.max_translation",
+            r.max_translation.into(),
+            0.0,
+            1.0,
+        )?;
+        c.in_range(
+            "mapper.registration.max_yaw_deg",
+            r.max_yaw_deg.into(),
+            0.0,
+            20.0,
+        )?;
+        c.in_range(
+            "mapper.registration.yaw_min_spread",
+            r.yaw_min_spread.into(),
+            0.0,
+            10.0,
+        )?;
+        c.in_range(
+            "mapper.registration.persist_gain",
+            r.persist_gain.into(),
+            0.0,
+            1.0,
+        )?;
+        c.in_range(
+            "mapper.registration.persist_decay",
+            r.persist_decay.into(),
+            0.0,
+            1.0,
+        )?;
         self.grid.validate(c)
     }
 }

@@ -479,8 +479,14 @@ impl Mapper {
         let pairs: Vec<(usize, usize)> = (0..obs.len())
             .filter_map(|k| assignment[k].map(|c| (obs[k].index, cands[c].object)))
             .collect();
-        let background = order.first().is_some_and(|i| is_background_class(dets[*i].class_id));
-        let dof = if background { register::Dof::Z } else { register::Dof::Full };
+        let background = order
+            .first()
+            .is_some_and(|i| is_background_class(dets[*i].class_id));
+        let dof = if background {
+            register::Dof::Z
+        } else {
+            register::Dof::Full
+        };
         let corr = self.reg.estimate(
             &self.objects,
             &self.det_points,

@@ -144,7 +144,9 @@ impl Registration {
                 self.cells.entry((k as u32, key(q))).or_default().push(q);
             }
             let pts = &points[i];
-            let step = pts.len().div_ceil(cfg.max_points_per_detection.max(1) as usize);
+            let step = pts
+                .len()
+                .div_ceil(cfg.max_points_per_detection.max(1) as usize);
             self.src
                 .extend(pts.iter().step_by(step.max(1)).map(|p| (k as u32, *p)));
         }
@@ -189,8 +191,9 @@ impl Registration {
             }
             // Drop detections that overlap their object too little.
             let per_pair = &self.per_pair;
-            let overlaps =
-                |k: u32| per_pair[k as usize].0 as f32 >= cfg.min_overlap * per_pair[k as usize].1 as f32;
+            let overlaps = |k: u32| {
+                per_pair[k as usize].0 as f32 >= cfg.min_overlap * per_pair[k as usize].1 as f32
+            };
             self.corr.retain(|x| overlaps(x.3));
             let kept = &mut self.corr;
             if kept.len() < cfg.min_correspondences as usize {
@@ -222,11 +225,15 @@ impl Registration {
         self.accepted += 1;
         Some(total)
     }
-
 }
 
 /// One least-squares step over the correspondences `(p, q, d², pair)` about the centre `c`.
-fn solve(corr: &[(Vec3, Vec3, f32, u32)], c: Vec3, dof: Dof, cfg: &RegistrationConfig) -> Correction {
+fn solve(
+    corr: &[(Vec3, Vec3, f32, u32)],
+    c: Vec3,
+    dof: Dof,
+    cfg: &RegistrationConfig,
+) -> Correction {
     let n = corr.len().max(1) as f32;
     let (mut ps, mut qs) = (Vec3::ZERO, Vec3::ZERO);
     for (p, q, _, _) in corr {
@@ -256,10 +263,7 @@ fn solve(corr: &[(Vec3, Vec3, f32, u32)], c: Vec3, dof: Dof, cfg: &RegistrationC
         0.0
     };
     // t such that Rz(yaw)(pm − c) + c + t = qm.
-    let r = Correction {
-        yaw,
-        t: Vec3::ZERO,
-    };
+    let r = Correction { yaw, t: Vec3::ZERO };
     let t = qm - r.apply(pm, c);
     Correction { yaw, t }
 }
@@ -306,7 +310,10 @@ mod tests {
 
     #[test]
     fn a_known_offset_of_3_cm_and_1_degree_is_recovered() {
-        let cfg = RegistrationConfig::default();
+        let cfg = RegistrationConfig {
+            enabled: true,
+            ..RegistrationConfig::default()
+        };
         let cam = Vec3::new(0.0, -1.0, 1.1);
         let boxes = [
             (Vec3::new(-0.35, 0.0, 0.85), Vec3::new(0.2, 0.15, 0.2)),
@@ -352,7 +359,10 @@ mod tests {
 
     #[test]
     fn a_view_of_an_unseen_side_gives_no_correction() {
-        let cfg = RegistrationConfig::default();
+        let cfg = RegistrationConfig {
+            enabled: true,
+            ..RegistrationConfig::default()
+        };
         let cam = Vec3::new(0.0, -1.0, 1.1);
         let (c, s) = (Vec3::new(0.0, 0.0, 0.85), Vec3::new(0.3, 0.4, 0.3));
         // The map holds the front face only; the frame sees the +x side (and a sliver of
@@ -360,7 +370,14 @@ mod tests {
         let objects = vec![object(&box_faces(c, s, 0.004, 0.0, &[0]), cam)];
         let frame = vec![box_faces(c, s, 0.006, 0.002, &[2])];
         let mut r = Registration::default();
-        let d = r.estimate(&objects, &frame, &[(0, 0)], Vec3::new(1.0, -0.2, 1.1), Dof::Full, &cfg);
+        let d = r.estimate(
+            &objects,
+            &frame,
+            &[(0, 0)],
+            Vec3::new(1.0, -0.2, 1.1),
+            Dof::Full,
+            &cfg,
+        );
         println!("{d:?}");
         assert!(
             d.is_none_or(|d| d.t.length() < 0.005 && d.yaw.abs() < 0.2f32.to_radians()),
@@ -370,11 +387,16 @@ mod tests {
 
     #[test]
     fn the_offset_persists_and_decays() {
-        let cfg = RegistrationConfig::default();
-        let mut r = Registration::default();
-        r.frame = Correction {
-            yaw: 0.01,
-            t: Vec3::new(0.02, 0.0, 0.0),
+        let cfg = RegistrationConfig {
+            enabled: true,
+            ..RegistrationConfig::default()
+        };
+        let mut r = Registration {
+            frame: Correction {
+                yaw: 0.01,
+                t: Vec3::new(0.02, 0.0, 0.0),
+            },
+            ..Registration::default()
         };
         r.end_frame(&cfg);
         assert!(r.offset.t.x > 0.0 && r.offset.t.x < 0.02);
