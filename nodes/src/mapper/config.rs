@@ -71,6 +71,49 @@ pub struct MapperConfig {
     pub sopm: SopmConfig,
     /// Exploration occupancy grid.
     pub grid: GridConfig,
+    /// Frame-to-map registration of the camera pose ([`super::register`]).
+    pub registration: RegistrationConfig,
+}
+
+/// `[mapper.registration]` section: frame-to-map registration of the camera pose.
+#[derive(Debug, Clone, PartialEq, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct RegistrationConfig {
+    /// On / off.
+    pub enabled: bool,
+    /// ICP iterations per estimate.
+    pub iterations: u32,
+    /// Largest correspondence distance, metres.
+    pub max_distance: f32,
+    /// Fraction of the closest correspondences kept.
+    pub trim: f32,
+    /// A detection takes part only if this fraction of its points has a correspondence.
+    pub min_overlap: f32,
+    /// Fewest correspondences for an accepted correction.
+    pub min_correspondences: u32,
+    /// Objects associated fewer times are not registered against.
+    pub min_object_observations: u32,
+    /// Points per detection used (subsampled).
+    pub max_points_per_detection: u32,
+    /// Bound on the translation of one frame's correction, metres.
+    pub max_translation: f32,
+    /// Bound on the yaw of one frame's correction, degrees.
+    pub max_yaw_deg: f32,
+    /// Estimate the yaw (else translation only).
+    pub estimate_yaw: bool,
+    /// The yaw is estimated only if the correspondences spread at least this much (rms, m).
+    pub yaw_min_spread: f32,
+    /// Fraction of a frame's correction folded into the persistent offset.
+    pub persist_gain: f32,
+    /// Per-frame decay of the persistent offset.
+    pub persist_decay: f32,
+}
+
+impl Default for RegistrationConfig {
+    /// The `[mapper.registration]` section of the built-in `config/default.toml`.
+    fn default() -> Self {
+        runtime::config::DEFAULTS.section("mapper.registration")
+    }
 }
 
 impl Default for MapperConfig {
@@ -688,6 +731,74 @@ impl MapperConfig {
         )?;
         c.in_range("mapper.sopm.eps_sopm", s.eps_sopm.into(), 0.0, 1.0)?;
         c.in_range("mapper.sopm.visible_cos", s.visible_cos.into(), -1.0, 1.0)?;
+        let r = &self.registration;
+        c.count(
+            "mapper.registration.iterations",
+            r.iterations as usize,
+            1,
+            50,
+        )?;
+        c.in_range(
+            "mapper.registration.max_distance",
+            r.max_distance.into(),
+            0.002,
+            0.5,
+        )?;
+        c.in_range("mapper.registration.trim", r.trim.into(), 0.1, 1.0)?;
+        c.in_range(
+            "mapper.registration.min_overlap",
+            r.min_overlap.into(),
+            0.0,
+            1.0,
+        )?;
+        c.count(
+            "mapper.registration.min_correspondences",
+            r.min_correspondences as usize,
+            3,
+            1_000_000,
+        )?;
+        c.count(
+            "mapper.registration.min_object_observations",
+            r.min_object_observations as usize,
+            1,
+            1000,
+        )?;
+        c.count(
+            "mapper.registration.max_points_per_detection",
+            r.max_points_per_detection as usize,
+            10,
+            1_000_000,
+        )?;
+        c.in_range(
+            "mapper.registration.max_translation",
+            r.max_translation.into(),
+            0.0,
+            1.0,
+        )?;
+        c.in_range(
+            "mapper.registration.max_yaw_deg",
+            r.max_yaw_deg.into(),
+            0.0,
+            20.0,
+        )?;
+        c.in_range(
+            "mapper.registration.yaw_min_spread",
+            r.yaw_min_spread.into(),
+            0.0,
+            10.0,
+        )?;
+        c.in_range(
+            "mapper.registration.persist_gain",
+            r.persist_gain.into(),
+            0.0,
+            1.0,
+        )?;
+        c.in_range(
+            "mapper.registration.persist_decay",
+            r.persist_decay.into(),
+            0.0,
+            1.0,
+        )?;
         self.grid.validate(c)
     }
 }

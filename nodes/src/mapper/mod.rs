@@ -11,6 +11,7 @@
 //! | [`priors`] | class size priors (the mapper's own table) |
 //! | [`association`], [`wilcoxon`] | detection → object association (rank-sum test) |
 //! | [`object`] | one mapped object: merged cloud, cuboid, SOPM |
+//! | [`register`] | frame-to-map registration of the camera pose |
 //! | [`cuboid`] | cuboid fitting (minimum-area rectangle over the convex hull) |
 //! | [`sopm`] | surface occupancy probability maps |
 //! | [`existence`] | existence log-odds: spurious objects are deleted |
@@ -59,6 +60,7 @@ pub mod object;
 pub mod points;
 pub mod priors;
 mod publish;
+pub mod register;
 pub mod segment;
 pub mod sopm;
 mod sparse;
@@ -161,6 +163,7 @@ pub struct Mapper {
     objects: Vec<MappedObject>,
     next_id: u32,
     grid: ExplorationGrid,
+    reg: register::Registration,
     last_frame_seq: u64,
     last_frame_stamp_ns: u64,
     last_sim_time_ns: u64,
@@ -197,6 +200,7 @@ impl Mapper {
             objects: Vec::new(),
             next_id: 1,
             grid: ExplorationGrid::new(&cfg.grid),
+            reg: register::Registration::default(),
             last_frame_seq: 0,
             last_frame_stamp_ns: 0,
             last_sim_time_ns: 0,
@@ -281,8 +285,10 @@ impl Mapper {
             height: frame.height,
             k: frame.intrinsics,
         };
-        let pose = pose_to_affine(&frame.camera_pose);
-        let cam_pos: Vec3 = pose.translation.into();
+        let mut pose = self
+            .reg
+            .begin_frame(&pose_to_affine(&frame.camera_pose), &self.cfg.registration);
+        let mut cam_pos: Vec3 = pose.translation.into();
         self.grid.integrate(frame, &camera, &pose);
 
         // Background detections first: their planes clean the foreground detections.
@@ -307,7 +313,7 @@ impl Mapper {
             if phase == 1 {
                 self.refresh_supports();
             }
-            self.process_group(
+            let corr = self.process_group(
                 frame,
                 detections,
                 &camera,
@@ -317,7 +323,12 @@ impl Mapper {
                 now_ns,
                 &mut stats,
             );
+            if let Some(d) = corr {
+                pose = d.affine(cam_pos) * pose;
+                cam_pos = pose.translation.into();
+            }
         }
+        self.reg.end_frame(&self.cfg.registration);
         self.det_order = order;
         if self.cfg.extensions.existence {
             stats.deleted = self.update_existence(frame, &camera, &pose, dets);
@@ -343,6 +354,7 @@ impl Mapper {
     }
 
     /// Extract, associate and merge one group of detections (all background or all foreground).
+    /// Returns the registration correction applied to the group's points.
     #[allow(clippy::too_many_arguments)]
     fn process_group(
         &mut self,
@@ -350,11 +362,11 @@ impl Mapper {
         detections: &Detections,
         camera: &Camera,
         pose: &Affine3A,
-        cam_pos: Vec3,
+        mut cam_pos: Vec3,
         order: &[usize],
         now_ns: u64,
         stats: &mut FrameStats,
-    ) {
+    ) -> Option<register::Correction> {
         let dets = detections.detections();
         let labels = detections.label_pixels();
         let extract = ExtractParams {
@@ -482,6 +494,33 @@ impl Mapper {
         let mut cands = std::mem::take(&mut self.cands);
         let mut assignment = std::mem::take(&mut self.assignment);
         association::assign(&mut cands, obs.len(), &mut assignment);
+        let pairs: Vec<(usize, usize)> = (0..obs.len())
+            .filter_map(|k| assignment[k].map(|c| (obs[k].index, cands[c].object)))
+            .collect();
+        let background = order
+            .first()
+            .is_some_and(|i| is_background_class(dets[*i].class_id));
+        let dof = if background {
+            register::Dof::Z
+        } else {
+            register::Dof::Full
+        };
+        let corr = self.reg.estimate(
+            &self.objects,
+            &self.det_points,
+            &pairs,
+            cam_pos,
+            dof,
+            &self.cfg.registration,
+        );
+        if let Some(d) = corr {
+            for ob in &obs {
+                for p in &mut self.det_points[ob.index] {
+                    *p = d.apply(*p, cam_pos);
+                }
+            }
+            cam_pos += d.t;
+        }
         let fit = self.fit_params();
         let sopm_params = self.cfg.sopm.params();
         for (k, ob) in obs.iter().enumerate() {
@@ -550,6 +589,7 @@ impl Mapper {
         }
         self.cands = cands;
         self.assignment = assignment;
+        corr
     }
 }
 
