@@ -269,6 +269,7 @@ mod tests {
         m.objects[0].id = 1;
         m.objects[0].background = 1;
         m.objects[0].cluster_id = 1;
+        m.objects[0].observations = 5;
         m.objects[1].id = 7;
         m.objects[1].cluster_id = 1;
         m.objects[1].class_id = 39; // bottle
