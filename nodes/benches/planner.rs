@@ -82,6 +82,7 @@ fn gbv_params(n: usize) -> GbvParams {
         sectors: 8,
         neck: nodes::planner::gbv::GbvNeck::new(&cfg),
         fa: nodes::planner::evaluate::FaFilter::new(&cfg),
+        distance_weight: cfg.gbv.distance_weight,
     }
 }
 

@@ -10,7 +10,10 @@ use nodes::sim::Scene;
 use std::path::Path;
 
 fn session(scene: &str, label: &str) -> (SessionSpec, SessionResult) {
-    let base = Config::ideal_sensing();
+    session_with(scene, label, Config::ideal_sensing())
+}
+
+fn session_with(scene: &str, label: &str, base: Config) -> (SessionSpec, SessionResult) {
     let cfg = base.with_camera(320, 240, base.bench.camera_hz);
     let path = Path::new(env!("CARGO_MANIFEST_DIR")).join(format!("tests/scenes/{scene}.toml"));
     let spec = SessionSpec {
@@ -56,7 +59,13 @@ fn coverage_explores_too_and_circles_both_tables() {
 
 #[test]
 fn an_object_in_a_corner_is_given_up_not_timed_out() {
-    let (spec, r) = session("corner-box", "vpsom");
+    // Every map object trusted (planner.min_observations = 0): with the default (3), a fragment
+    // seen in one or two frames no longer pulls the GBV target centroid off the table, the
+    // views aim better and the backpack's SOPM completes (H_sopm < ε_sopm in 10 goals, path 14.5 m
+    // against 18.2 m), so the stall and out-of-views rules this test is about are not reached.
+    let mut base = Config::ideal_sensing();
+    base.planner.min_observations = 0;
+    let (spec, r) = session_with("corner-box", "vpsom", base);
     let m = &r.metrics;
     assert_eq!(r.summary.status, PlannerStatus::Terminated, "{}", r.summary);
     assert!(m.terminated && m.time_s < spec.max_sim_s, "{m:?}");

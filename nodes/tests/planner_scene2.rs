@@ -71,6 +71,7 @@ fn gbv_reaches_around_the_desk_by_the_wall_on_the_simulators_map() {
         sectors: planner.bootstrap.sectors,
         neck: nodes::planner::gbv::GbvNeck::new(&planner),
         fa: nodes::planner::evaluate::FaFilter::new(&planner),
+        distance_weight: planner.gbv.distance_weight,
     };
     // The ring as the planner reads the map, against what the simulated base accepts.
     let reach = params.nav.flooded(&nav, [base[0], base[1]]);

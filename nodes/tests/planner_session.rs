@@ -353,6 +353,8 @@ fn gbv_params() -> GbvParams {
         sectors: 8,
         neck: nodes::planner::gbv::GbvNeck::new(&cfg),
         fa: nodes::planner::evaluate::FaFilter::new(&cfg),
+        // F(v) alone: these tests check the view's worth, not the travel cost.
+        distance_weight: 0.0,
     }
 }
 

@@ -152,6 +152,15 @@ pub struct GbvConfig {
     /// Score each candidate base pose at the neck yaw the LBV will choose there (false: neck 0,
     /// the camera on the cluster centre).
     pub neck_aware: bool,
+    /// Travel cost of a candidate: it is chosen by `F(v) / F_max − distance_weight × path`
+    /// (path on the navigation grid from the robot, metres; F_max the round's best F), so a view
+    /// `1 / distance_weight` metres further must be twice as informative. 0: F(v) alone.
+    pub distance_weight: f32,
+    /// GBV rounds a cluster that ended (out of rounds or views) gets again when a new unfinished
+    /// foreground object appears in it (0: an ended cluster never reopens).
+    pub reopen_rounds: u32,
+    /// How many times one cluster may reopen (bounds the session).
+    pub max_reopens: u32,
 }
 
 impl Default for GbvConfig {
@@ -306,6 +315,10 @@ pub struct PlannerConfig {
     /// configuration-space map, as the simulator's pre-built map is); if false the planner
     /// inflates them by `robot_radius` itself.
     pub nav_inflated: bool,
+    /// VP-SOM: a map object (foreground or background) with fewer associated detections is not
+    /// yet trusted: it neither opens a cluster nor holds the session open (detector false
+    /// positives are seen in one or two frames).
+    pub min_observations: u32,
     /// Global best view.
     pub gbv: GbvConfig,
     /// Local best view.
@@ -383,6 +396,25 @@ impl PlannerConfig {
             g.revisit_radius.into(),
             0.0,
             10.0,
+        )?;
+        c.in_range(
+            "planner.gbv.distance_weight",
+            g.distance_weight.into(),
+            0.0,
+            10.0,
+        )?;
+        c.count(
+            "planner.gbv.reopen_rounds",
+            g.reopen_rounds as usize,
+            0,
+            1000,
+        )?;
+        c.count("planner.gbv.max_reopens", g.max_reopens as usize, 0, 100)?;
+        c.count(
+            "planner.min_observations",
+            self.min_observations as usize,
+            0,
+            1_000_000,
         )?;
         let l = &self.lbv;
         c.count("planner.lbv.candidates", l.candidates, 1, 100_000)?;

@@ -15,8 +15,10 @@
 //! cluster without any foreground object yet (f_a is 0 there), candidates in sectors it was
 //! already seen from are dropped too, so that successive rounds look at it from new sides (see
 //! [`crate::planner::clusters`]). If every candidate of a cluster is dropped, the next unfinished
-//! cluster is tried within the same round. The best candidate
-//! becomes the [`NavGoal`](shm_types::NavGoal).
+//! cluster is tried within the same round. The candidate maximising
+//! `F(v) / F_max − distance_weight × path` (path on the navigation grid from the robot, metres;
+//! F_max the best F of the round; plain F(v) when `distance_weight` is 0 or F_max ≤ 0) becomes the
+//! [`NavGoal`](shm_types::NavGoal): of views worth about the same, the near one.
 //!
 //! [`GbvJob`] owns copies of its inputs (`Send + 'static`) so a host can run it on a
 //! low-priority pool and poll for the [`GbvResult`], which hands the buffers back for reuse.
@@ -54,6 +56,8 @@ pub struct GbvParams {
     pub neck: GbvNeck,
     /// Which objects f_a counts.
     pub fa: FaFilter,
+    /// Travel cost per metre of path, relative to the round's best F(v) (`gbv.distance_weight`).
+    pub distance_weight: f32,
 }
 
 /// The neck yaw a GBV candidate is scored at: the LBV's choice (its candidates and weights).
@@ -107,6 +111,7 @@ impl GbvParams {
             sectors: cfg.bootstrap.sectors,
             neck: GbvNeck::new(cfg),
             fa: FaFilter::new(cfg),
+            distance_weight: cfg.gbv.distance_weight,
         }
     }
 }
@@ -300,7 +305,14 @@ impl GbvJob {
                 centroid: unfinished_centroid(&self.map, info, p.eval.eps_sopm),
             };
             let (cands, _) = evaluate_poses_in(&self.map, &ok, Some(&target), Some(&walls), &p);
-            let Some(k) = argmax(&cands) else {
+            let paths: Vec<f32> = ok
+                .iter()
+                .map(|b| {
+                    nav.path_length([b[0], b[1]])
+                        .unwrap_or_else(|| (b[0] - self.base[0]).hypot(b[1] - self.base[1]))
+                })
+                .collect();
+            let Some(k) = choose(&cands, &paths, p.distance_weight) else {
                 continue;
             };
             best = Some(GbvChoice {
@@ -326,6 +338,21 @@ impl GbvJob {
             nav: self.nav,
         }
     }
+}
+
+/// Index of the candidate maximising `value / max value − weight × path` (first on ties); plain
+/// [`argmax`] when `weight` is 0 or no value is positive.
+pub fn choose(c: &[Candidate], paths: &[f32], weight: f32) -> Option<usize> {
+    let k = argmax(c)?;
+    let top = c[k].value;
+    if weight <= 0.0 || top <= 0.0 {
+        return Some(k);
+    }
+    let adj = |i: usize| c[i].value / top - weight * paths[i];
+    (0..c.len()).fold(None, |best: Option<usize>, i| match best {
+        Some(b) if adj(i) <= adj(b) => Some(b),
+        _ => Some(i),
+    })
 }
 
 /// Index of the highest value (first on ties).

@@ -14,6 +14,12 @@
 //!
 //! Given-up objects count as finished for termination ([`GiveUps::settled`]); the session
 //! reports them ([`GivenUpObject`]).
+//!
+//! # Untrusted objects (`planner.min_observations`)
+//! A map object with fewer associated detections than `min_observations` is not trusted yet
+//! (detector false positives last one or two frames): an untrusted foreground object is neither
+//! open nor given up, and a cluster whose background object is untrusted is settled, so neither
+//! opens a cluster or holds the session open. Once trusted, it counts like any other.
 
 use crate::planner::clusters::{ClusterInfo, fg_done, members};
 use shm_types::{ObjectMap, class_name};
@@ -89,16 +95,18 @@ struct Track {
 pub struct GiveUps {
     rule: StallRule,
     eps_sopm: f32,
+    min_observations: u32,
     tracks: Vec<Track>,
     given_up: Vec<GivenUpObject>,
 }
 
 impl GiveUps {
-    /// An empty record.
-    pub fn new(rule: StallRule, eps_sopm: f32) -> Self {
+    /// An empty record; objects with fewer than `min_observations` detections are untrusted.
+    pub fn new(rule: StallRule, eps_sopm: f32, min_observations: u32) -> Self {
         Self {
             rule,
             eps_sopm,
+            min_observations,
             tracks: Vec::new(),
             given_up: Vec::with_capacity(shm_types::MAX_OBJECTS),
         }
@@ -114,14 +122,23 @@ impl GiveUps {
         &self.given_up
     }
 
-    fn open_members<'a>(
+    /// Whether the object has enough detections to be trusted.
+    pub fn trusted(&self, o: &shm_types::MapObject) -> bool {
+        o.observations >= self.min_observations
+    }
+
+    /// Whether a foreground object still needs views: trusted, not done, not given up.
+    pub fn is_open(&self, o: &shm_types::MapObject) -> bool {
+        !o.is_background() && self.trusted(o) && !fg_done(o, self.eps_sopm) && !self.contains(o.id)
+    }
+
+    /// The open foreground objects of cluster `cluster` (see [`GiveUps::is_open`]).
+    pub fn open_members<'a>(
         &'a self,
         map: &'a ObjectMap,
         cluster: i32,
     ) -> impl Iterator<Item = &'a shm_types::MapObject> + 'a {
-        members(map, cluster)
-            .filter(move |o| !o.is_background() && !fg_done(o, self.eps_sopm))
-            .filter(move |o| !self.contains(o.id))
+        members(map, cluster).filter(move |o| self.is_open(o))
     }
 
     fn give_up(&mut self, o: &shm_types::MapObject, cause: GiveUpCause) {
@@ -190,19 +207,21 @@ impl GiveUps {
         objs.len()
     }
 
-    /// Whether cluster `info` needs no more views: done, or every unfinished foreground object
-    /// of it given up (a cluster without foreground objects follows `info.done`). Does not
-    /// allocate.
+    /// Whether cluster `info` needs no more views: done, its background object untrusted, or no
+    /// foreground object of it open (a cluster without foreground objects follows `info.done`).
+    /// Does not allocate.
     pub fn settled(&self, map: &ObjectMap, info: &ClusterInfo) -> bool {
-        info.done || info.foreground > 0 && self.open_members(map, info.id).next().is_none()
+        info.done
+            || members(map, info.id).any(|o| o.is_background() && !self.trusted(o))
+            || info.foreground > 0 && self.open_members(map, info.id).next().is_none()
     }
 
-    /// Mark every given-up object of `map` complete (for a planning job's snapshot, so that the
-    /// target centroid and completion rules skip them).
+    /// Mark every given-up or untrusted foreground object of `map` complete (for a planning
+    /// job's snapshot, so that the target centroid and completion rules skip them).
     pub fn mark_complete(&self, map: &mut ObjectMap) {
         let n = map.count as usize;
         for o in map.objects[..n].iter_mut() {
-            if self.contains(o.id) {
+            if self.contains(o.id) || !o.is_background() && !self.trusted(o) {
                 o.complete = 1;
             }
         }
@@ -250,6 +269,7 @@ mod tests {
         m.objects[0].id = 1;
         m.objects[0].background = 1;
         m.objects[0].cluster_id = 1;
+        m.objects[0].observations = 5;
         m.objects[1].id = 7;
         m.objects[1].cluster_id = 1;
         m.objects[1].class_id = 39; // bottle
@@ -260,7 +280,7 @@ mod tests {
 
     #[test]
     fn an_object_seen_without_progress_is_given_up_and_settles_its_cluster() {
-        let mut g = GiveUps::new(rule(), 0.42);
+        let mut g = GiveUps::new(rule(), 0.42, 1);
         let m = map_with(0.6, 1);
         g.start(&m, 1);
         let info = crate::planner::clusters::cluster_info(&m, 1, 0.42).unwrap();
@@ -294,7 +314,7 @@ mod tests {
         g.mark_complete(&mut snap);
         assert!(snap.objects[1].is_complete());
         // A done object is never given up.
-        let mut g2 = GiveUps::new(rule(), 0.42);
+        let mut g2 = GiveUps::new(rule(), 0.42, 1);
         assert_eq!(g2.cluster_ended(&map_with(0.3, 1), 1), 0);
         assert_eq!(g2.cluster_ended(&map_with(0.5, 1), 1), 1);
     }

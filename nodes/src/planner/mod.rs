@@ -57,8 +57,11 @@
 //! gave it up ([`giveup`]: its entropy stopped falling, or its cluster ran out of GBV rounds or
 //! new views); a cluster when all its foreground objects are; a cluster with no foreground object
 //! yet when its centre has been in view from `bootstrap.empty_cluster_sectors` sectors. VP-SOM
-//! ends `Terminated` when every cluster is done and the room is explored, `NoCandidates` when
-//! a cluster could never be approached (no reachable candidate) or nothing was found at all.
+//! ends `Terminated` when every cluster is done, given up or unreachable and the room is
+//! explored (the causes listed in [`Summary::reason`]), `NoCandidates` only when nothing was
+//! found at all. An ended cluster reopens for a new object (`gbv.reopen_rounds`, bounded by
+//! `gbv.max_reopens`); objects with fewer than `planner.min_observations` detections open no
+//! cluster.
 //! [`Summary`] reports the counts and [`Summary::reason`] the reason.
 
 pub mod baselines;

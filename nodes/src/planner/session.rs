@@ -75,7 +75,8 @@ pub struct Summary {
     pub clusters: u32,
     /// Of which done (VP-SOM rule) or circled (coverage).
     pub clusters_done: u32,
-    /// Clusters given up without a reachable view (never approached).
+    /// Clusters given up without a reachable view (never approached); VP-SOM still ends
+    /// `Terminated` with them listed in [`Summary::reason`].
     pub clusters_given_up: u32,
     /// Foreground objects in the last map seen.
     pub foreground: u32,
@@ -103,11 +104,20 @@ impl Summary {
             PlannerStatus::Terminated => match self.kind {
                 PlannerKind::Frontier => "explored (no reachable frontier)".into(),
                 PlannerKind::Coverage => format!("every cluster circled, {explored}"),
-                PlannerKind::Vpsom if self.objects_given_up > 0 => format!(
-                    "objects given up: {} (the rest complete, {explored})",
-                    self.objects_given_up
-                ),
-                PlannerKind::Vpsom => format!("complete and {explored}"),
+                PlannerKind::Vpsom => {
+                    let mut causes = Vec::new();
+                    if self.objects_given_up > 0 {
+                        causes.push(format!("objects given up: {}", self.objects_given_up));
+                    }
+                    if self.clusters_given_up > 0 {
+                        causes.push(format!("clusters unreachable: {}", self.clusters_given_up));
+                    }
+                    if causes.is_empty() {
+                        format!("complete and {explored}")
+                    } else {
+                        format!("{} (the rest complete, {explored})", causes.join(", "))
+                    }
+                }
             },
             PlannerStatus::NoCandidates if self.clusters == 0 => {
                 format!("nothing found ({explored}, no cluster)")

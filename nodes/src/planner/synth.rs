@@ -47,7 +47,7 @@ pub fn add_object(
     o.size = size;
     o.first_seen_ns = first_seen_ns;
     o.c_asso = 0.96;
-    o.observations = observed_from.len() as u32;
+    o.observations = 10 * observed_from.len() as u32;
     o.sopm_shape = sopm_shape::CYLINDER;
     o.sopm_cols = COLS as u16;
     o.sopm_rows = ROWS as u16;

@@ -17,7 +17,14 @@
 //!    candidate count too). A cluster that was approached at least once and then runs out of
 //!    rounds, or of new views, ends: its unfinished objects are given up. A cluster that never
 //!    had a reachable candidate is given up as unreachable. A GBV goal still being driven to when
-//!    no cluster is open any more is superseded by exploration.
+//!    no cluster is open any more is superseded by exploration. Among a round's candidates the
+//!    one maximising `F(v) / F_max − gbv.distance_weight × path` is chosen ([`GbvJob`]).
+//! 4. **Reopen**: an ended cluster in which a new open foreground object appears (one first seen
+//!    late, hidden behind another) reopens with `gbv.reopen_rounds` more rounds, at most
+//!    `gbv.max_reopens` times per cluster, so it cannot loop.
+//!
+//! Objects with fewer than `planner.min_observations` detections are not trusted: they open no
+//! cluster and hold no session open ([`GiveUps::trusted`]).
 //!
 //! An open cluster is one that is not done, not ended, not unreachable, and has an unfinished
 //! foreground object not given up (or, without foreground objects, was not yet seen from enough
@@ -25,12 +32,13 @@
 //! first open cluster; with none, the neck sweeps while exploring, and otherwise stays on the
 //! last GBV goal's cluster (a 360° sweep on top of the base's turns loses localization).
 //! Termination: no open cluster and the room explored → `Terminated` (objects given up are
-//! listed in the summary and [`ViewPlanner::given_up_objects`]); `NoCandidates` if a cluster was
-//! unreachable or nothing was found at all.
+//! listed in the summary and [`ViewPlanner::given_up_objects`], clusters given up as unreachable
+//! counted in [`Summary::clusters_given_up`] and its reason); `NoCandidates` only if nothing was
+//! found at all.
 
 use crate::config::CameraConfig;
 use crate::geom::CameraMount;
-use crate::planner::clusters::{self, ClusterInfo, fg_done, members};
+use crate::planner::clusters::{self, ClusterInfo, members};
 use crate::planner::config::{PlannerConfig, PlannerKind};
 use crate::planner::evaluate::{EvalParams, Target};
 use crate::planner::gbv::{GbvJob, GbvParams};
@@ -70,6 +78,8 @@ pub struct VpsomPlanner {
     visited: Vec<(i32, [f32; 2])>,
     /// Clusters approached and then out of rounds or views.
     ended: Vec<i32>,
+    /// Times each cluster reopened.
+    reopens: Vec<(i32, u32)>,
     /// Clusters closed for the LBV (unreachable, ended, or every unfinished object given up);
     /// refreshed by `next_goal`, read on the LBV path (fixed capacity).
     closed: Vec<i32>,
@@ -104,8 +114,9 @@ impl VpsomPlanner {
             rounds: Vec::with_capacity(shm_types::MAX_OBJECTS),
             visited: Vec::new(),
             ended: Vec::with_capacity(shm_types::MAX_OBJECTS),
+            reopens: Vec::new(),
             closed: Vec::with_capacity(shm_types::MAX_OBJECTS),
-            give_ups: GiveUps::new(rule, cfg.eps_sopm),
+            give_ups: GiveUps::new(rule, cfg.eps_sopm, cfg.min_observations),
         }
     }
 
@@ -146,6 +157,38 @@ impl VpsomPlanner {
         }
     }
 
+    /// Reopen every ended cluster with a new open foreground object (one that appeared after it
+    /// ended), within the reopen budget: it gets `gbv.reopen_rounds` more rounds.
+    fn reopen(&mut self, map: &ObjectMap) {
+        let g = self.cfg.gbv;
+        if g.reopen_rounds == 0 {
+            return;
+        }
+        let mut k = 0;
+        while k < self.ended.len() {
+            let id = self.ended[k];
+            let times = self
+                .reopens
+                .iter()
+                .find(|(c, _)| *c == id)
+                .map_or(0, |r| r.1);
+            if times >= g.max_reopens || self.give_ups.open_members(map, id).next().is_none() {
+                k += 1;
+                continue;
+            }
+            self.ended.swap_remove(k);
+            match self.reopens.iter_mut().find(|(c, _)| *c == id) {
+                Some((_, n)) => *n += 1,
+                None => self.reopens.push((id, 1)),
+            }
+            let left = g.max_rounds_per_cluster.saturating_sub(g.reopen_rounds);
+            match self.rounds.iter_mut().find(|(c, _)| *c == id) {
+                Some((_, n)) => *n = (*n).min(left),
+                None => self.rounds.push((id, left)),
+            }
+        }
+    }
+
     /// Whether a cluster needs more views.
     fn is_open(&self, map: &ObjectMap, c: &ClusterInfo) -> bool {
         !self.session.given_up.contains(&c.id)
@@ -156,10 +199,9 @@ impl VpsomPlanner {
     /// The centroid of the cluster's unfinished objects not given up (its centre if none);
     /// does not allocate.
     fn open_centroid(&self, map: &ObjectMap, info: &ClusterInfo) -> Vec3 {
-        let eps = self.cfg.eps_sopm;
         let (mut sum, mut n) = (Vec3::ZERO, 0u32);
         for o in members(map, info.id) {
-            if !o.is_background() && !fg_done(o, eps) && !self.give_ups.contains(o.id) {
+            if self.give_ups.is_open(o) {
                 sum += Vec3::from(o.center);
                 n += 1;
             }
@@ -191,12 +233,14 @@ impl VpsomPlanner {
     }
 
     fn finish(&mut self, map: &ObjectMap, all: &[ClusterInfo], now_ns: u64) -> Step {
-        // Objects that appeared in an ended cluster after it ended are given up with it.
+        // Objects that appeared in an ended cluster after its reopen budget was spent are given
+        // up with it.
         for id in self.ended.clone() {
             self.give_ups.cluster_ended(map, id);
         }
         self.session.objects_given_up = self.give_ups.list().len() as u32;
-        let status = if all.is_empty() || !self.session.given_up.is_empty() {
+        // Clusters given up as unreachable are listed (summary); they end the session normally.
+        let status = if all.is_empty() {
             PlannerStatus::NoCandidates
         } else {
             PlannerStatus::Terminated
@@ -225,6 +269,7 @@ impl ViewPlanner for VpsomPlanner {
             self.give_ups.round_ended(map, g.cluster_id);
             self.session.objects_given_up = self.give_ups.list().len() as u32;
         }
+        self.reopen(map);
         let all: Vec<ClusterInfo> =
             clusters::clusters(map, eps, &self.session.sides, self.min_sides());
         let open: Vec<ClusterInfo> = all
