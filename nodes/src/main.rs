@@ -342,7 +342,10 @@ fn run(config: Option<PathBuf>, cmd: RunCmd) -> anyhow::Result<ExitCode> {
         let exe = std::env::current_exe().context("locating the vpsom executable")?;
         let outcome = deploy::run(&args, &cfg, &exe)?;
         match &outcome.metrics {
-            Some(m) => print_metrics(m),
+            Some(m) => {
+                print_metrics(m);
+                print!("{}", outcome.input_rows());
+            }
             None => print!("{}", outcome.unscored_summary()),
         }
         if outcome.failed {

@@ -325,7 +325,7 @@ VPSOM_STATIC_ASSERT(offsetof(vpsom_MapObject, points) == 3972, "vpsom_MapObject.
 VPSOM_STATIC_ASSERT(offsetof(vpsom_MapObject, point_los) == 4740, "vpsom_MapObject.point_los: offset");
 VPSOM_STATIC_ASSERT(offsetof(vpsom_MapObject, reserved_tail) == 5508, "vpsom_MapObject.reserved_tail: offset");
 
-/* vpsom::ObjectMap: 705584 bytes, alignment 8 */
+/* vpsom::ObjectMap: 705600 bytes, alignment 8 */
 typedef struct vpsom_ObjectMap {
 #ifdef __cplusplus
     static constexpr const char *IOX2_TYPE_NAME = "vpsom::ObjectMap";
@@ -335,16 +335,24 @@ typedef struct vpsom_ObjectMap {
     uint64_t last_frame_stamp_ns;            /* offset 32, ns */
     uint32_t count;                          /* offset 40, count */
     float eps_sopm;                          /* offset 44, 1 */
-    vpsom_MapObject objects[128];            /* offset 48, struct */
+    uint32_t frames_integrated;              /* offset 48, count */
+    uint32_t frames_rejected;                /* offset 52, count */
+    uint32_t frames_unmatched;               /* offset 56, count */
+    uint32_t reserved;                       /* offset 60, pad */
+    vpsom_MapObject objects[128];            /* offset 64, struct */
 } vpsom_ObjectMap;
-VPSOM_STATIC_ASSERT(sizeof(vpsom_ObjectMap) == 705584, "vpsom_ObjectMap: size");
+VPSOM_STATIC_ASSERT(sizeof(vpsom_ObjectMap) == 705600, "vpsom_ObjectMap: size");
 VPSOM_STATIC_ASSERT(VPSOM_ALIGNOF(vpsom_ObjectMap) == 8, "vpsom_ObjectMap: alignment");
 VPSOM_STATIC_ASSERT(offsetof(vpsom_ObjectMap, header) == 0, "vpsom_ObjectMap.header: offset");
 VPSOM_STATIC_ASSERT(offsetof(vpsom_ObjectMap, last_frame_seq) == 24, "vpsom_ObjectMap.last_frame_seq: offset");
 VPSOM_STATIC_ASSERT(offsetof(vpsom_ObjectMap, last_frame_stamp_ns) == 32, "vpsom_ObjectMap.last_frame_stamp_ns: offset");
 VPSOM_STATIC_ASSERT(offsetof(vpsom_ObjectMap, count) == 40, "vpsom_ObjectMap.count: offset");
 VPSOM_STATIC_ASSERT(offsetof(vpsom_ObjectMap, eps_sopm) == 44, "vpsom_ObjectMap.eps_sopm: offset");
-VPSOM_STATIC_ASSERT(offsetof(vpsom_ObjectMap, objects) == 48, "vpsom_ObjectMap.objects: offset");
+VPSOM_STATIC_ASSERT(offsetof(vpsom_ObjectMap, frames_integrated) == 48, "vpsom_ObjectMap.frames_integrated: offset");
+VPSOM_STATIC_ASSERT(offsetof(vpsom_ObjectMap, frames_rejected) == 52, "vpsom_ObjectMap.frames_rejected: offset");
+VPSOM_STATIC_ASSERT(offsetof(vpsom_ObjectMap, frames_unmatched) == 56, "vpsom_ObjectMap.frames_unmatched: offset");
+VPSOM_STATIC_ASSERT(offsetof(vpsom_ObjectMap, reserved) == 60, "vpsom_ObjectMap.reserved: offset");
+VPSOM_STATIC_ASSERT(offsetof(vpsom_ObjectMap, objects) == 64, "vpsom_ObjectMap.objects: offset");
 
 /* vpsom::OccupancyGrid: 65584 bytes, alignment 8 */
 typedef struct vpsom_OccupancyGrid {

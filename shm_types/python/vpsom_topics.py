@@ -246,7 +246,7 @@ class MapObject(ctypes.Structure):
 
 
 class ObjectMap(ctypes.Structure):
-    """vpsom::ObjectMap: 705584 bytes, alignment 8."""
+    """vpsom::ObjectMap: 705600 bytes, alignment 8."""
 
     _fields_ = [
         ("header", Header),  # offset 0, struct
@@ -254,7 +254,11 @@ class ObjectMap(ctypes.Structure):
         ("last_frame_stamp_ns", ctypes.c_uint64),  # offset 32, ns
         ("count", ctypes.c_uint32),  # offset 40, count
         ("eps_sopm", ctypes.c_float),  # offset 44, 1
-        ("objects", MapObject * 128),  # offset 48, struct
+        ("frames_integrated", ctypes.c_uint32),  # offset 48, count
+        ("frames_rejected", ctypes.c_uint32),  # offset 52, count
+        ("frames_unmatched", ctypes.c_uint32),  # offset 56, count
+        ("reserved", ctypes.c_uint32),  # offset 60, pad
+        ("objects", MapObject * 128),  # offset 64, struct
     ]
 
     @staticmethod
@@ -532,13 +536,17 @@ LAYOUT = {
         "point_los": {"offset": 4740, "size": 768, "type": "f32", "dims": [64, 3], "unit": "1"},
         "reserved_tail": {"offset": 5508, "size": 4, "type": "u32", "dims": [], "unit": "pad"},
     }},
-    "ObjectMap": {"type_name": "vpsom::ObjectMap", "size": 705584, "align": 8, "fields": {
+    "ObjectMap": {"type_name": "vpsom::ObjectMap", "size": 705600, "align": 8, "fields": {
         "header": {"offset": 0, "size": 24, "type": "Header", "dims": [], "unit": "struct"},
         "last_frame_seq": {"offset": 24, "size": 8, "type": "u64", "dims": [], "unit": "id"},
         "last_frame_stamp_ns": {"offset": 32, "size": 8, "type": "u64", "dims": [], "unit": "ns"},
         "count": {"offset": 40, "size": 4, "type": "u32", "dims": [], "unit": "count"},
         "eps_sopm": {"offset": 44, "size": 4, "type": "f32", "dims": [], "unit": "1"},
-        "objects": {"offset": 48, "size": 705536, "type": "MapObject", "dims": [128], "unit": "struct"},
+        "frames_integrated": {"offset": 48, "size": 4, "type": "u32", "dims": [], "unit": "count"},
+        "frames_rejected": {"offset": 52, "size": 4, "type": "u32", "dims": [], "unit": "count"},
+        "frames_unmatched": {"offset": 56, "size": 4, "type": "u32", "dims": [], "unit": "count"},
+        "reserved": {"offset": 60, "size": 4, "type": "u32", "dims": [], "unit": "pad"},
+        "objects": {"offset": 64, "size": 705536, "type": "MapObject", "dims": [128], "unit": "struct"},
     }},
     "OccupancyGrid": {"type_name": "vpsom::OccupancyGrid", "size": 65584, "align": 8, "fields": {
         "header": {"offset": 0, "size": 24, "type": "Header", "dims": [], "unit": "struct"},

@@ -487,6 +487,16 @@ pub struct ObjectMap {
     pub count: u32,
     /// Completion threshold ε_sopm used to set `complete`.
     pub eps_sopm: f32,
+    /// Depth frames integrated so far (the mapper's running count).
+    pub frames_integrated: u32,
+    /// Depth frames or detections rejected so far because they failed validation (NaN pose,
+    /// counts out of range, ...): received, counted, not integrated.
+    pub frames_rejected: u32,
+    /// Depth frames skipped so far because no matching detections arrived (or their size or
+    /// sequence number did not match the frame).
+    pub frames_unmatched: u32,
+    /// Zero (keeps `objects` 8-byte aligned without implicit padding).
+    pub reserved: u32,
     /// The objects, first `count` valid.
     pub objects: [MapObject; MAX_OBJECTS],
 }
@@ -506,6 +516,9 @@ impl ObjectMap {
         self.last_frame_seq = src.last_frame_seq;
         self.last_frame_stamp_ns = src.last_frame_stamp_ns;
         self.eps_sopm = src.eps_sopm;
+        self.frames_integrated = src.frames_integrated;
+        self.frames_rejected = src.frames_rejected;
+        self.frames_unmatched = src.frames_unmatched;
         self.count = objects.len() as u32;
         self.objects[..objects.len()].copy_from_slice(objects);
     }

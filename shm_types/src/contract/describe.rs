@@ -186,6 +186,10 @@ pub(super) fn types() -> Vec<TypeLayout> {
             last_frame_stamp_ns: "ns",
             count: "count",
             eps_sopm: "1",
+            frames_integrated: "count",
+            frames_rejected: "count",
+            frames_unmatched: "count",
+            reserved: "pad",
             objects: "struct",
         }),
         layout!(OccupancyGrid {

@@ -96,6 +96,9 @@ pub struct RunOutcome {
     pub objects: (usize, usize, usize),
     /// Samples the launcher saw on each input that came from outside the run.
     pub external: Vec<(&'static str, u64)>,
+    /// The mapper's account of the depth frames it received, from its last map:
+    /// `(integrated, rejected as invalid, skipped for want of matching detections)`.
+    pub mapper_frames: (u32, u32, u32),
     /// Why the run ended.
     pub reason: String,
     /// Whether a node failed for good.
@@ -113,6 +116,16 @@ impl RunOutcome {
             "| objects mapped (foreground / complete) | {} ({} / {}) |\n",
             self.objects.0, self.objects.1, self.objects.2
         );
+        t + &self.input_rows()
+    }
+
+    /// Table rows on the inputs: what the mapper integrated, rejected and skipped, and the
+    /// samples each external input sent (none when the sim ran here).
+    pub fn input_rows(&self) -> String {
+        let (integrated, rejected, unmatched) = self.mapper_frames;
+        let mut t = format!("| depth frames integrated by the mapper | {integrated} |\n");
+        t += &format!("| frames rejected by the mapper (failed validation) | {rejected} |\n");
+        t += &format!("| frames skipped by the mapper (no matching detections) | {unmatched} |\n");
         for (topic, n) in &self.external {
             t += &format!("| samples received on {topic} (external) | {n} |\n");
         }
@@ -279,6 +292,11 @@ pub fn run(args: &RunArgs, cfg: &Config, exe: &Path) -> anyhow::Result<RunOutcom
         log.observe_visibility(&v);
     }
     let est = eval::estimates_from_map(&map);
+    let mapper_frames = (
+        map.frames_integrated,
+        map.frames_rejected,
+        map.frames_unmatched,
+    );
     let objects = (
         map.objects().len(),
         map.objects().iter().filter(|o| !o.is_background()).count(),
@@ -304,6 +322,7 @@ pub fn run(args: &RunArgs, cfg: &Config, exe: &Path) -> anyhow::Result<RunOutcom
             metrics: None,
             objects,
             external: external.samples(),
+            mapper_frames,
             reason,
             failed,
         });
@@ -327,6 +346,7 @@ pub fn run(args: &RunArgs, cfg: &Config, exe: &Path) -> anyhow::Result<RunOutcom
         metrics: Some(metrics),
         objects,
         external: external.samples(),
+        mapper_frames,
         reason,
         failed,
     })

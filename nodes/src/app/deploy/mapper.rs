@@ -4,7 +4,7 @@ use super::RunArgs;
 use super::host::{self, Flow, HostError, NodeHost, Pace};
 use crate::app::topics;
 use crate::config::Config;
-use crate::mapper::Mapper;
+use crate::mapper::{Mapper, MapperError};
 use runtime::clock::MonotonicClock;
 use runtime::executor::{ExecutorConfig, SchedPolicy};
 use runtime::ports::{PortContext, Publisher, Received, Subscriber};
@@ -47,6 +47,11 @@ struct MapperHost {
     next_map: u64,
     /// Detections of a frame not integrated yet.
     pending: Option<Received<Detections>>,
+    /// Frames integrated, rejected as invalid, and skipped for want of matching detections
+    /// (published in every map, so the run's summary reports them).
+    counts: FrameCounts,
+    /// Simulated time of the newest frame.
+    last_t: u64,
     _ctx: PortContext,
 }
 
@@ -66,6 +71,8 @@ impl MapperHost {
             state: RobotState::default(),
             next_map: 0,
             pending: None,
+            counts: FrameCounts::default(),
+            last_t: 0,
             _ctx: ctx,
         })
     }
@@ -101,6 +108,22 @@ impl MapperHost {
     }
 }
 
+impl MapperHost {
+    /// Publishes the map (with the frame counts) and the exploration grid at simulated time `t`.
+    fn publish(&mut self, t: u64) -> Result<(), HostError> {
+        let mut m = self.map_pub.loan()?;
+        self.mapper.write_map(&mut m, t);
+        m.frames_integrated = self.counts.integrated;
+        m.frames_rejected = self.counts.rejected;
+        m.frames_unmatched = self.counts.unmatched;
+        m.send(host::stamp(&self.clock, t))?;
+        let mut g = self.grid_pub.loan()?;
+        self.mapper.write_grid(&mut g);
+        g.send(host::stamp(&self.clock, t))?;
+        Ok(())
+    }
+}
+
 impl NodeHost for MapperHost {
     fn step(&mut self, stop: &AtomicBool) -> Result<Flow, HostError> {
         let frame = match self.depth.wait(Duration::from_millis(200)) {
@@ -115,21 +138,39 @@ impl NodeHost for MapperHost {
         }
         let Some(det) = self.detections_of(frame.header.seq, stop)? else {
             eprintln!("mapper: no detections for frame {}", frame.header.seq);
+            self.counts.unmatched += 1;
             return Ok(Flow::Busy);
         };
-        if let Err(e) = self.mapper.integrate(&frame, &det, &self.state) {
-            eprintln!("mapper: frame {}: {e}", frame.header.seq);
+        match self.mapper.integrate(&frame, &det, &self.state) {
+            Ok(_) => self.counts.integrated += 1,
+            Err(e) => {
+                eprintln!("mapper: frame {}: {e}", frame.header.seq);
+                match e {
+                    MapperError::Invalid { .. } => self.counts.rejected += 1,
+                    _ => self.counts.unmatched += 1,
+                }
+            }
         }
         let t = frame.header.sim_time_ns;
+        self.last_t = t;
         if t >= self.next_map {
-            let mut m = self.map_pub.loan()?;
-            self.mapper.write_map(&mut m, t);
-            m.send(host::stamp(&self.clock, t))?;
-            let mut g = self.grid_pub.loan()?;
-            self.mapper.write_grid(&mut g);
-            g.send(host::stamp(&self.clock, t))?;
+            self.publish(t)?;
             self.next_map = t + self.map_period;
         }
         Ok(Flow::Busy)
     }
+
+    /// On a clean stop, one last map: what was integrated after the last periodic one, and the
+    /// final frame counts, are not lost.
+    fn finish(mut self) -> Result<(), HostError> {
+        self.publish(self.last_t)
+    }
+}
+
+/// The mapper's running account of the depth frames it received.
+#[derive(Debug, Default)]
+struct FrameCounts {
+    integrated: u32,
+    rejected: u32,
+    unmatched: u32,
 }
