@@ -1030,7 +1030,7 @@ mod tests {
         );
         assert_eq!(
             size_of::<ObjectMap>(),
-            48 + MAX_OBJECTS * size_of::<MapObject>()
+            64 + MAX_OBJECTS * size_of::<MapObject>()
         );
         assert_eq!(size_of::<OccupancyGrid>(), 24 + 24 + MAX_GRID_CELLS);
         assert_eq!(size_of::<NavGoal>(), 56);
