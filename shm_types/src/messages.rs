@@ -7,7 +7,7 @@
 //! (`UPDATE_CONTRACT=1 cargo test --release -p shm_types --test contract`) and add the field's
 //! unit to `contract/describe.rs` (the build fails until every field is listed there).
 
-use crate::validate::{Checker, Validate, ValidationError};
+use crate::validate::{Checker, Field, Validate, ValidationError};
 use crate::{AnyBitPattern, ClassId, ZeroValid};
 use iceoryx2::prelude::ZeroCopySend;
 
@@ -69,7 +69,7 @@ impl Pose3 {
         rotation: [0.0, 0.0, 0.0, 1.0],
     };
 
-    fn check(&self, c: &Checker, field: &str) -> Result<(), ValidationError> {
+    fn check(&self, c: &Checker, field: &'static str) -> Result<(), ValidationError> {
         c.finite(field, &self.translation)?;
         c.finite(field, &self.rotation)?;
         let n2: f32 = self.rotation.iter().map(|q| q * q).sum();
@@ -239,25 +239,25 @@ impl Validate for Detections {
         c.count("count", self.count as usize, MAX_DETECTIONS)?;
         c.count("masks", self.masks as usize, mask_mode::MASKS as usize)?;
         for (k, d) in self.detections().iter().enumerate() {
-            c.range(&format!("items[{k}].score"), d.score, 0.0, 1.0)?;
+            c.range(Field::item("items", k, "score"), d.score, 0.0, 1.0)?;
             c.count(
-                &format!("items[{k}].class_id"),
+                Field::item("items", k, "class_id"),
                 d.class_id as usize,
                 crate::COCO_CLASSES.len() - 1,
             )?;
             if d.bbox[0] > d.bbox[2] || d.bbox[1] > d.bbox[3] {
                 return Err(c.err(
-                    &format!("items[{k}].bbox"),
+                    Field::item("items", k, "bbox"),
                     format!("{:?} is inverted", d.bbox),
                 ));
             }
             c.count(
-                &format!("items[{k}].bbox.x1"),
+                Field::item("items", k, "bbox.x1"),
                 d.bbox[2] as usize,
                 self.width as usize,
             )?;
             c.count(
-                &format!("items[{k}].bbox.y1"),
+                Field::item("items", k, "bbox.y1"),
                 d.bbox[3] as usize,
                 self.height as usize,
             )?;
@@ -429,44 +429,44 @@ impl MapObject {
     }
 
     fn check(&self, c: &Checker, k: usize) -> Result<(), ValidationError> {
-        let f = |name: &str| format!("objects[{k}].{name}");
-        c.finite(&f("center"), &self.center)?;
-        c.finite(&f("size"), &self.size)?;
+        let f = |name: &'static str| Field::item("objects", k, name);
+        c.finite(f("center"), &self.center)?;
+        c.finite(f("size"), &self.size)?;
         if self.size.iter().any(|s| *s < 0.0) {
-            return Err(c.err(&f("size"), format!("{:?} has a negative extent", self.size)));
+            return Err(c.err(f("size"), format!("{:?} has a negative extent", self.size)));
         }
-        c.finite(&f("yaw"), &[self.yaw])?;
-        c.range(&f("h_sopm"), self.h_sopm, 0.0, 1.0 + 1e-4)?;
-        c.range(&f("c_asso"), self.c_asso, 0.0, 1.0)?;
-        c.finite(&f("l_best"), &self.l_best)?;
+        c.finite(f("yaw"), &[self.yaw])?;
+        c.range(f("h_sopm"), self.h_sopm, 0.0, 1.0 + 1e-4)?;
+        c.range(f("c_asso"), self.c_asso, 0.0, 1.0)?;
+        c.finite(f("l_best"), &self.l_best)?;
         c.count(
-            &f("sopm_shape"),
+            f("sopm_shape"),
             self.sopm_shape as usize,
             sopm_shape::SPHERE as usize,
         )?;
         c.count(
-            &f("sopm_cells"),
+            f("sopm_cells"),
             self.sopm_rows as usize * self.sopm_cols as usize,
             MAX_SOPM_CELLS,
         )?;
         c.count(
-            &f("sample_count"),
+            f("sample_count"),
             self.sample_count as usize,
             MAX_OBJECT_POINTS,
         )?;
         c.count(
-            &f("class_id"),
+            f("class_id"),
             self.class_id as usize,
             crate::COCO_CLASSES.len() - 1,
         )?;
         for (i, p) in self.cells().iter().enumerate() {
             if !(0.0..=1.0).contains(p) {
-                return Err(c.err(&f("sopm_prob"), format!("cell {i} is {p}, outside [0, 1]")));
+                return Err(c.err(f("sopm_prob"), format!("cell {i} is {p}, outside [0, 1]")));
             }
         }
         for (p, l) in self.samples() {
-            c.finite(&f("points"), p)?;
-            c.finite(&f("point_los"), l)?;
+            c.finite(f("points"), p)?;
+            c.finite(f("point_los"), l)?;
         }
         Ok(())
     }
@@ -895,8 +895,8 @@ impl Validate for PlannerDecision {
                 v.n_cp,
                 v.cos_theta_c,
             ];
-            c.finite(&format!("candidates[{k}].position"), &v.position)?;
-            c.finite(&format!("candidates[{k}].terms"), &terms)?;
+            c.finite(Field::item("candidates", k, "position"), &v.position)?;
+            c.finite(Field::item("candidates", k, "terms"), &terms)?;
         }
         Ok(())
     }
@@ -957,7 +957,7 @@ impl Validate for FrameVisibility {
         c.count("count", self.count as usize, MAX_OBJECTS)?;
         for (k, v) in self.items().iter().enumerate() {
             if v.bbox.iter().any(|x| !x.is_finite()) {
-                c.finite(&format!("items[{k}].bbox"), &v.bbox)?;
+                c.finite(Field::item("items", k, "bbox"), &v.bbox)?;
             }
         }
         Ok(())

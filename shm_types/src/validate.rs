@@ -1,5 +1,11 @@
 //! Validation of received payloads: a consumer calls [`Validate::validate`] before trusting a
 //! sample written by another process.
+//!
+//! Validation allocates nothing while a payload is valid: a field is named by a [`Field`] (a
+//! `&'static str`, or an array element and its field), and the error's strings are built only
+//! when a check fails. It can therefore run on a real-time path.
+
+use std::fmt;
 
 /// A payload field that is not finite or not in range.
 #[derive(Debug, Clone, PartialEq, thiserror::Error)]
@@ -19,19 +25,59 @@ pub trait Validate {
     fn validate(&self) -> Result<(), ValidationError>;
 }
 
+/// The name of a checked field, formatted only when a check fails.
+#[derive(Debug, Clone, Copy)]
+pub(crate) enum Field {
+    /// A top-level field, e.g. `"width"`.
+    Top(&'static str),
+    /// Field `name` of element `index` of array `array`, e.g. `objects[3].center`.
+    Item {
+        array: &'static str,
+        index: usize,
+        name: &'static str,
+    },
+}
+
+impl Field {
+    /// Field `name` of element `index` of `array`.
+    pub fn item(array: &'static str, index: usize, name: &'static str) -> Self {
+        Field::Item { array, index, name }
+    }
+}
+
+impl From<&'static str> for Field {
+    fn from(name: &'static str) -> Self {
+        Field::Top(name)
+    }
+}
+
+impl fmt::Display for Field {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        match self {
+            Field::Top(name) => f.write_str(name),
+            Field::Item { array, index, name } => write!(f, "{array}[{index}].{name}"),
+        }
+    }
+}
+
 pub(crate) struct Checker {
     pub message: &'static str,
 }
 
 impl Checker {
-    pub fn finite(&self, field: &str, values: &[f32]) -> Result<(), ValidationError> {
+    pub fn finite(&self, field: impl Into<Field>, values: &[f32]) -> Result<(), ValidationError> {
         match values.iter().position(|v| !v.is_finite()) {
             None => Ok(()),
             Some(i) => Err(self.err(field, format!("element {i} is {} (not finite)", values[i]))),
         }
     }
 
-    pub fn count(&self, field: &str, value: usize, max: usize) -> Result<(), ValidationError> {
+    pub fn count(
+        &self,
+        field: impl Into<Field>,
+        value: usize,
+        max: usize,
+    ) -> Result<(), ValidationError> {
         if value <= max {
             Ok(())
         } else {
@@ -39,7 +85,13 @@ impl Checker {
         }
     }
 
-    pub fn range(&self, field: &str, value: f32, lo: f32, hi: f32) -> Result<(), ValidationError> {
+    pub fn range(
+        &self,
+        field: impl Into<Field>,
+        value: f32,
+        lo: f32,
+        hi: f32,
+    ) -> Result<(), ValidationError> {
         if value.is_finite() && value >= lo && value <= hi {
             Ok(())
         } else {
@@ -47,10 +99,10 @@ impl Checker {
         }
     }
 
-    pub fn err(&self, field: &str, reason: String) -> ValidationError {
+    pub fn err(&self, field: impl Into<Field>, reason: String) -> ValidationError {
         ValidationError {
             message: self.message,
-            field: field.to_string(),
+            field: field.into().to_string(),
             reason,
         }
     }
