@@ -7,7 +7,7 @@
 //! by a byte array, so every bit pattern is a valid value and the type holds no pointers.
 
 use iceoryx2::prelude::ZeroCopySend;
-use shm_types::{AnyBitPattern, Header, Message, ZeroValid};
+use shm_types::{AnyBitPattern, Header, Message, Validate, ValidationError, ZeroValid};
 use std::fmt;
 
 macro_rules! payload {
@@ -37,6 +37,13 @@ macro_rules! payload {
             }
             fn header_mut(&mut self) -> &mut Header {
                 &mut self.header
+            }
+        }
+
+        /// Filler bytes: every value is valid.
+        impl Validate for $name {
+            fn validate(&self) -> Result<(), ValidationError> {
+                Ok(())
             }
         }
 

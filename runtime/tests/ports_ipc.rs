@@ -89,7 +89,11 @@ fn publisher_child(ns: &str) {
         let mut frame = publisher.loan().unwrap();
         frame.width = MAX_WIDTH as u32;
         frame.height = MAX_HEIGHT as u32;
+        // A valid frame (subscribers drop invalid ones on receipt); fx carries k.
         frame.intrinsics.fx = k as f32;
+        frame.intrinsics.fy = 1.0;
+        frame.intrinsics.max_range = 5.0;
+        frame.camera_pose.rotation = [0.0, 0.0, 0.0, 1.0];
         for (i, px) in frame.pixels_mut().iter_mut().enumerate() {
             *px = pattern(k, i);
         }

@@ -1,10 +1,12 @@
 //! The [`Message`] trait: every top-level payload carries a [`Header`], and a loaned shared-memory
 //! sample can be zero-initialised in place ([`init_zeroed`]) without a stack temporary, or, for
-//! [`AnyBitPattern`] payloads, taken as it is ([`init_reused`]).
+//! [`AnyBitPattern`] payloads, taken as it is ([`init_reused`]). Every message is [`Validate`]:
+//! subscribers check each sample on receipt.
 
 use crate::{
     AnyBitPattern, DeadlineEvent, DepthFrame, Detections, FrameVisibility, Header, NavGoal,
-    NeckGoal, ObjectMap, OccupancyGrid, PlannerDecision, RobotState, ZeroValid, zero_in_place,
+    NeckGoal, ObjectMap, OccupancyGrid, PlannerDecision, RobotState, Validate, ZeroValid,
+    zero_in_place,
 };
 use iceoryx2::prelude::{ZeroCopySend, ipc};
 use iceoryx2::sample_mut::SampleMut;
@@ -14,7 +16,7 @@ use std::mem::MaybeUninit;
 
 /// A top-level message: zero-valid, sendable through iceoryx2, and starting with a [`Header`]
 /// that the runtime's publisher stamps (sequence number, source time).
-pub trait Message: ZeroValid + Debug + 'static {
+pub trait Message: ZeroValid + Validate + Debug + 'static {
     /// The message's header.
     fn header(&self) -> &Header;
     /// The message's header, mutable.

@@ -323,6 +323,11 @@ mod tests {
             f.width = k as u32;
             f.height = 1;
             f.pixels_mut().fill(k as u16);
+            // Valid intrinsics and pose: the subscriber drops invalid frames on receipt.
+            f.intrinsics.fx = 1.0;
+            f.intrinsics.fy = 1.0;
+            f.intrinsics.max_range = 5.0;
+            f.camera_pose.rotation = [0.0, 0.0, 0.0, 1.0];
             let sent = f
                 .send(Stamp {
                     source_ns: 0,

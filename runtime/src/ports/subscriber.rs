@@ -1,5 +1,9 @@
-//! The receiving side: [`Subscriber`] (one per topic and consumer, with its sequence-gap count)
-//! and the [`Received`] sample it lends out of shared memory.
+//! The receiving side: [`Subscriber`] (one per topic and consumer, with its sequence-gap and
+//! invalid-sample counts) and the [`Received`] sample it lends out of shared memory.
+//!
+//! Every sample is validated on receipt ([`shm_types::Validate`], allocation-free while the
+//! sample is valid): one that fails is returned to its publisher unread, counted, and logged at
+//! most once per [`INVALID_LOG_EVERY`] per subscriber. A consumer never sees it.
 
 use super::Services;
 use super::error::{ConnectError, ReceiveError, SubscriberError, WaitError};
@@ -12,6 +16,9 @@ use std::fmt;
 use std::ops::Deref;
 use std::time::{Duration, Instant};
 
+/// Least interval between two log lines about invalid samples on one subscriber.
+pub const INVALID_LOG_EVERY: Duration = Duration::from_secs(1);
+
 /// Receives `T` on one topic, zero-copy.
 pub struct Subscriber<T: Message> {
     port: iceoryx2::port::subscriber::Subscriber<ipc::Service, T, ()>,
@@ -19,6 +26,8 @@ pub struct Subscriber<T: Message> {
     services: Services<T>,
     last_seq: Cell<Option<u64>>,
     gaps: Cell<u64>,
+    invalid: Cell<u64>,
+    last_invalid_log: Cell<Option<Instant>>,
 }
 
 impl<T: Message> fmt::Debug for Subscriber<T> {
@@ -26,6 +35,7 @@ impl<T: Message> fmt::Debug for Subscriber<T> {
         f.debug_struct("Subscriber")
             .field("service", &self.services.name)
             .field("gaps", &self.gaps.get())
+            .field("invalid", &self.invalid.get())
             .finish_non_exhaustive()
     }
 }
@@ -84,20 +94,52 @@ impl<T: Message> Subscriber<T> {
             services: sv,
             last_seq: Cell::new(None),
             gaps: Cell::new(0),
+            invalid: Cell::new(0),
+            last_invalid_log: Cell::new(None),
         })
     }
 
-    /// The oldest unread sample, if any (never blocks).
+    /// The oldest unread valid sample, if any (never blocks). Invalid samples before it are
+    /// dropped and counted ([`Subscriber::invalid`]).
     pub fn receive(&self) -> Result<Option<Received<T>>, ReceiveError> {
-        let sample = self.port.receive().map_err(|source| ReceiveError {
-            service: self.services.name.clone(),
-            source,
-        })?;
-        Ok(sample.map(|sample| {
+        loop {
+            let sample = self.port.receive().map_err(|source| ReceiveError {
+                service: self.services.name.clone(),
+                source,
+            })?;
+            let Some(sample) = sample else {
+                return Ok(None);
+            };
             let r = Received { sample };
             self.track(r.header().seq);
-            r
-        }))
+            match r.validate() {
+                Ok(()) => return Ok(Some(r)),
+                Err(e) => self.reject(r.header().seq, &e),
+            }
+        }
+    }
+
+    /// Counts an invalid sample and logs it, rate-limited.
+    fn reject(&self, seq: u64, e: &shm_types::ValidationError) {
+        self.invalid.set(self.invalid.get() + 1);
+        let now = Instant::now();
+        if self
+            .last_invalid_log
+            .get()
+            .is_none_or(|t| now.duration_since(t) >= INVALID_LOG_EVERY)
+        {
+            self.last_invalid_log.set(Some(now));
+            eprintln!(
+                "{}: dropped invalid sample seq {seq}: {e} ({} invalid so far)",
+                self.services.name,
+                self.invalid.get()
+            );
+        }
+    }
+
+    /// Samples dropped on receipt because they failed validation.
+    pub fn invalid(&self) -> u64 {
+        self.invalid.get()
     }
 
     /// Drain the buffer and return only the newest sample, if any (never blocks).

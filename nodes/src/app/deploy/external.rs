@@ -94,6 +94,8 @@ trait Watched {
     fn publishers(&self) -> usize;
     /// Receive everything buffered: `(samples, newest header.sim_time_ns)`.
     fn drain(&self) -> Result<(u64, Option<u64>), ReceiveError>;
+    /// Samples dropped on receipt because they failed validation.
+    fn invalid(&self) -> u64;
 }
 
 impl<T: Message> Watched for Subscriber<T> {
@@ -108,6 +110,10 @@ impl<T: Message> Watched for Subscriber<T> {
             t = Some(s.header().sim_time_ns);
         }
         Ok((n, t))
+    }
+
+    fn invalid(&self) -> u64 {
+        Subscriber::invalid(self)
     }
 }
 
@@ -178,9 +184,9 @@ impl ExternalInputs {
             .collect()
     }
 
-    /// Samples seen per topic so far.
-    pub fn samples(&self) -> Vec<(&'static str, u64)> {
-        self.watched.iter().map(|w| (w.0, w.2)).collect()
+    /// Per topic: `(topic, valid samples seen, invalid samples dropped)` so far.
+    pub fn samples(&self) -> Vec<(&'static str, u64, u64)> {
+        self.watched.iter().map(|w| (w.0, w.2, w.1.invalid())).collect()
     }
 
     /// Drain every watched topic; then, if a topic has no publisher, say which (at most every

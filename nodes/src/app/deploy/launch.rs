@@ -94,8 +94,9 @@ pub struct RunOutcome {
     pub metrics: Option<eval::Metrics>,
     /// Objects in the final map: `(all, foreground, complete foreground)`.
     pub objects: (usize, usize, usize),
-    /// Samples the launcher saw on each input that came from outside the run.
-    pub external: Vec<(&'static str, u64)>,
+    /// Per input that came from outside the run: `(topic, valid samples the launcher saw,
+    /// invalid samples it dropped)`.
+    pub external: Vec<(&'static str, u64, u64)>,
     /// The mapper's account of the depth frames it received, from its last map:
     /// `(integrated, rejected as invalid, skipped for want of matching detections)`.
     pub mapper_frames: (u32, u32, u32),
@@ -126,8 +127,9 @@ impl RunOutcome {
         let mut t = format!("| depth frames integrated by the mapper | {integrated} |\n");
         t += &format!("| frames rejected by the mapper (failed validation) | {rejected} |\n");
         t += &format!("| frames skipped by the mapper (no matching detections) | {unmatched} |\n");
-        for (topic, n) in &self.external {
+        for (topic, n, invalid) in &self.external {
             t += &format!("| samples received on {topic} (external) | {n} |\n");
+            t += &format!("| invalid samples dropped on {topic} (external) | {invalid} |\n");
         }
         t
     }

@@ -114,7 +114,10 @@ impl MapperHost {
         let mut m = self.map_pub.loan()?;
         self.mapper.write_map(&mut m, t);
         m.frames_integrated = self.counts.integrated;
-        m.frames_rejected = self.counts.rejected;
+        // Invalid samples are dropped on receipt by the ports; the mapper's own checks catch
+        // the rest (e.g. a frame and detections that disagree in size).
+        let dropped = self.depth.invalid() + self.dets.invalid();
+        m.frames_rejected = self.counts.rejected + u32::try_from(dropped).unwrap_or(u32::MAX);
         m.frames_unmatched = self.counts.unmatched;
         m.send(host::stamp(&self.clock, t))?;
         let mut g = self.grid_pub.loan()?;
