@@ -2,8 +2,9 @@
 //! `depth`, `detections` and `robot/state` and says which have none; a driver (here this test,
 //! on the same services a C or Python driver opens through the topic contract) publishes
 //! frames; the mapper maps from them; with no scene, scoring is skipped and the summary says so.
-//! The second test does the same with the example Python driver (`shm_types/python/`), which
-//! meets the topic contract from outside Rust and sends one frame with a NaN pose.
+//! The second test runs `vpsom run --nodes mapper,planner,recorder` against the example Python
+//! driver (`shm_types/python/`), which meets the topic contract from outside Rust, publishes the
+//! navigation grid the planner needs, and sends one frame with a NaN pose.
 
 use nodes::app::topics;
 use nodes::config::Config;
@@ -69,14 +70,14 @@ fn fill_frame(f: &mut DepthFrame) {
     }
 }
 
-/// A `vpsom run --nodes mapper,recorder` in namespace `ns` with the deep-buffer overlay, writing
-/// to `dir/out`; its stderr comes line by line through the receiver.
-fn spawn_run(dir: &Path, ns: &str) -> (Child, mpsc::Receiver<String>, JoinHandle<()>) {
+/// A `vpsom run --nodes NODES` in namespace `ns` with the deep-buffer overlay, writing to
+/// `dir/out`; its stderr comes line by line through the receiver.
+fn spawn_run(dir: &Path, ns: &str, nodes: &str) -> (Child, mpsc::Receiver<String>, JoinHandle<()>) {
     std::fs::create_dir_all(dir).unwrap();
     let overlay = dir.join("overlay.toml");
     std::fs::write(&overlay, OVERLAY).unwrap();
     let mut child = Command::new(env!("CARGO_BIN_EXE_vpsom"))
-        .args(["run", "--nodes", "mapper,recorder", "--ns", ns, "--config"])
+        .args(["run", "--nodes", nodes, "--ns", ns, "--config"])
         .arg(&overlay)
         .arg("--out")
         .arg(dir.join("out"))
@@ -146,7 +147,7 @@ fn row(stdout: &str, name: &str) -> u64 {
 fn mapper_maps_frames_from_outside_and_scoring_is_skipped_without_a_scene() {
     let dir = std::env::temp_dir().join(format!("vpsom-run-external-{}", std::process::id()));
     let ns = format!("ext{}", std::process::id());
-    let (child, lines, reader) = spawn_run(&dir, &ns);
+    let (child, lines, reader) = spawn_run(&dir, &ns, "mapper,recorder");
     let overlay = dir.join("overlay.toml");
     let out = dir.join("out");
     let mut log = String::new();
@@ -229,12 +230,12 @@ fn python_driver_frames_are_mapped_and_its_nan_pose_frame_is_counted() {
     let driver = Path::new(env!("CARGO_MANIFEST_DIR")).join("../shm_types/python/replay_driver.py");
     let dir = std::env::temp_dir().join(format!("vpsom-run-python-{}", std::process::id()));
     let ns = format!("py{}", std::process::id());
-    let (child, lines, reader) = spawn_run(&dir, &ns);
+    let (child, lines, reader) = spawn_run(&dir, &ns, "mapper,planner,recorder");
     let mut log = String::new();
     wait_for(
         &lines,
         &mut log,
-        "no publisher yet on depth, detections, robot/state",
+        "no publisher yet on depth, detections, robot/state, nav/grid",
     );
     let driver_out = Command::new(&python)
         .arg(&driver)
@@ -258,18 +259,32 @@ fn python_driver_frames_are_mapped_and_its_nan_pose_frame_is_counted() {
     assert_eq!(counts["depth"], SENT, "{counts}");
     assert_eq!(counts["detections"], SENT, "{counts}");
     assert_eq!(counts["nan_pose_frames"], 1, "{counts}");
+    let grids = counts["nav/grid"].as_u64().unwrap();
+    assert!(grids >= 1, "{counts}");
     // Let the mapper integrate the last frame.
     std::thread::sleep(Duration::from_secs(1));
     let stdout = stop_run(child, &lines, reader, &mut log);
     println!("{stdout}");
     // The port drops the NaN-pose frame on receipt (the launcher's and the mapper's alike).
-    assert_eq!(row(&stdout, "samples received on depth (external)"), SENT - 1);
-    assert_eq!(row(&stdout, "invalid samples dropped on depth (external)"), 1);
+    assert_eq!(
+        row(&stdout, "samples received on depth (external)"),
+        SENT - 1
+    );
+    assert_eq!(
+        row(&stdout, "invalid samples dropped on depth (external)"),
+        1
+    );
     assert_eq!(
         row(&stdout, "samples received on detections (external)"),
         SENT
     );
     assert!(row(&stdout, "samples received on robot/state (external)") >= SENT);
+    assert_eq!(
+        row(&stdout, "samples received on nav/grid (external)"),
+        grids
+    );
+    // The planner ran on the driver's state, map and navigation grid.
+    assert!(row(&stdout, "LBV cycles of the planner") > 0, "{stdout}");
     assert_eq!(
         row(&stdout, "frames rejected by the mapper (failed validation)"),
         1

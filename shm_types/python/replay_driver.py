@@ -1,15 +1,18 @@
-"""Example robot driver: publishes depth, detections and robot/state into a `vpsom run` namespace.
+"""Example robot driver: publishes depth, detections, robot/state and nav/grid into a `vpsom run` namespace.
 
 Replays a short generated sequence (a chair-sized box 1.5 m in front of a still camera on a wall
 3 m away) at the contract rates: depth + detections at --camera-hz (config rates.camera_hz = 30),
-robot/state at --state-hz (rates.state_hz = 50). After each sample it notifies the event service
-of the same name (the runtime's subscribers block on it). --nan-pose N makes depth frame N (1-based)
-carry a NaN camera pose, which the mapper must reject and count.
+robot/state at --state-hz (rates.state_hz = 50), and the navigation map (nav/grid: a pre-built
+obstacle grid of the 4 m x 4 m room with the chair in it, as a robot's mapping stack gives) once a
+second. After each sample it notifies the event service of the same name (the runtime's
+subscribers block on it). --nan-pose N makes depth frame N (1-based) carry a NaN camera pose,
+which the mapper must reject and count.
 
     python shm_types/python/replay_driver.py NAMESPACE [--frames 30] [--nan-pose 5]
 
 Needs `pip install iceoryx2==0.10.0` (the iceoryx2 crate version in Cargo.lock).
-Prints one JSON line: {"depth": n, "detections": n, "robot/state": n, "nan_pose_frames": n}.
+Prints one JSON line: {"robot/state": n, "depth": n, "detections": n, "nav/grid": n,
+"nan_pose_frames": n}.
 """
 
 import argparse
@@ -26,6 +29,12 @@ import vpsom_topics as vt  # noqa: E402
 W, H, FX = 320, 240, 277.0
 BOX = (120, 80, 200, 160)  # u0, v0, u1, v1 px of the object in every frame
 WALL_MM, OBJECT_MM = 3000, 1500
+# Navigation grid: the room x in [-1, 3), y in [-2, 2) m (walls on its border), the chair's
+# footprint x in [1.5, 1.8), y in [-0.25, 0.25) m.
+GRID_ORIGIN, GRID_RES = (-1.5, -2.5), 0.05
+GRID_W, GRID_H = 100, 100
+ROOM = (-1.0, 3.0, -2.0, 2.0)
+CHAIR = (1.5, 1.8, -0.25, 0.25)
 
 
 class Port:
@@ -57,6 +66,24 @@ def depth_rows():
     return background, (ctypes.c_uint16 * W)(*obj)
 
 
+def fill_grid(g):
+    """The navigation map: occupied outside the room and on the chair, free elsewhere."""
+    g.origin[:] = list(GRID_ORIGIN)
+    g.resolution, g.width, g.height = GRID_RES, GRID_W, GRID_H
+
+    def inside(box, x, y):
+        return box[0] <= x < box[1] and box[2] <= y < box[3]
+
+    cells = bytearray(GRID_W * GRID_H)
+    for iy in range(GRID_H):
+        y = GRID_ORIGIN[1] + (iy + 0.5) * GRID_RES
+        for ix in range(GRID_W):
+            x = GRID_ORIGIN[0] + (ix + 0.5) * GRID_RES
+            free = inside(ROOM, x, y) and not inside(CHAIR, x, y)
+            cells[iy * GRID_W + ix] = vt.GRID_CELL_FREE if free else vt.GRID_CELL_OCCUPIED
+    ctypes.memmove(ctypes.addressof(g.cells), bytes(cells), len(cells))
+
+
 def main():
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     ap.add_argument("namespace", help="the run's namespace (vpsom run prints it)")
@@ -68,14 +95,15 @@ def main():
     args = ap.parse_args()
 
     node = iox2.NodeBuilder.new().create(iox2.ServiceType.Ipc)
-    ports = {t: Port(node, args.namespace, t) for t in ("robot/state", "depth", "detections")}
+    topics = ("robot/state", "depth", "detections", "nav/grid")
+    ports = {t: Port(node, args.namespace, t) for t in topics}
     background, object_row = depth_rows()
     row_bytes = W * 2
     class_id = vt.COCO_CLASSES.index(args.cls)
     t0 = time.monotonic_ns()
     cam_period, state_period = 1.0 / args.camera_hz, 1.0 / args.state_hz
-    next_cam = next_state = time.monotonic()
-    frames = state_seq = nan_frames = 0
+    next_cam = next_state = next_grid = time.monotonic()
+    frames = state_seq = grid_seq = nan_frames = 0
 
     def header(h, seq):
         now = time.monotonic_ns()
@@ -93,6 +121,15 @@ def main():
 
             ports["robot/state"].send(state)
             next_state += state_period
+        if now >= next_grid:
+            grid_seq += 1
+
+            def grid(g):
+                header(g.header, grid_seq)
+                fill_grid(g)
+
+            ports["nav/grid"].send(grid)
+            next_grid += 1.0
         if now >= next_cam:
             frames += 1
             bad = frames == args.nan_pose

@@ -100,6 +100,8 @@ pub struct RunOutcome {
     /// The mapper's account of the depth frames it received, from its last map:
     /// `(integrated, rejected as invalid, skipped for want of matching detections)`.
     pub mapper_frames: (u32, u32, u32),
+    /// The planner's activity: `(LBV cycles, navigation goals published)`.
+    pub planner_activity: (u64, u64),
     /// Why the run ended.
     pub reason: String,
     /// Whether a node failed for good.
@@ -127,6 +129,9 @@ impl RunOutcome {
         let mut t = format!("| depth frames integrated by the mapper | {integrated} |\n");
         t += &format!("| frames rejected by the mapper (failed validation) | {rejected} |\n");
         t += &format!("| frames skipped by the mapper (no matching detections) | {unmatched} |\n");
+        let (cycles, goals) = self.planner_activity;
+        t += &format!("| LBV cycles of the planner | {cycles} |\n");
+        t += &format!("| navigation goals published by the planner | {goals} |\n");
         for (topic, n, invalid) in &self.external {
             t += &format!("| samples received on {topic} (external) | {n} |\n");
             t += &format!("| invalid samples dropped on {topic} (external) | {invalid} |\n");
@@ -186,6 +191,7 @@ pub fn run(args: &RunArgs, cfg: &Config, exe: &Path) -> anyhow::Result<RunOutcom
     let mut log = SessionLog::starting_at(0);
     let mut map = boxed_zeroed::<ObjectMap>();
     let (mut sim_ns, mut misses, mut lbv_cycles, mut goal) = (0u64, 0u64, 0u64, None::<NavGoal>);
+    let mut goals = 0u64;
     let mut final_state = None;
     let mut failed = false;
     let mut last_status = Instant::now();
@@ -220,6 +226,7 @@ pub fn run(args: &RunArgs, cfg: &Config, exe: &Path) -> anyhow::Result<RunOutcom
         }
         while let Some(g) = nav.receive()? {
             goal = Some(*g);
+            goals += 1;
         }
         if let Some(line) = external.poll(Instant::now())? {
             eprintln!("\n{line}");
@@ -325,6 +332,7 @@ pub fn run(args: &RunArgs, cfg: &Config, exe: &Path) -> anyhow::Result<RunOutcom
             objects,
             external: external.samples(),
             mapper_frames,
+            planner_activity: (lbv_cycles, goals),
             reason,
             failed,
         });
@@ -349,6 +357,7 @@ pub fn run(args: &RunArgs, cfg: &Config, exe: &Path) -> anyhow::Result<RunOutcom
         objects,
         external: external.samples(),
         mapper_frames,
+        planner_activity: (lbv_cycles, goals),
         reason,
         failed,
     })
