@@ -244,7 +244,7 @@ fn main() -> ExitCode {
     match result {
         Ok(code) => code,
         Err(e) => {
-            eprintln!("error: {e:#}");
+            eprintln!("error: {}", nodes::app::error_report(&e));
             ExitCode::FAILURE
         }
     }
