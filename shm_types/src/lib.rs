@@ -11,7 +11,9 @@
 //! - [`Pose3`] stores `parent_from_child` as a translation and a unit quaternion `[x, y, z, w]`;
 //! - angles are radians; times are nanoseconds.
 //!
-//! Every type implements [`Validate`], which rejects NaN/inf and out-of-range counts, and
+//! Every type implements [`Validate`], which rejects NaN/inf, out-of-range counts and values
+//! outside the documented rules (each type's `Validate` impl lists them; the plausibility bounds
+//! are in [`bounds`]), and
 //! [`ZeroValid`], which states that all-zero bytes are a valid value (so a loaned sample can be
 //! zero-filled in place and then written field by field, and lockstep hosts can heap-allocate one
 //! with [`boxed_zeroed`] without building it on the stack). The large frame types also implement
@@ -24,6 +26,7 @@
 //! | `messages.rs` | the message types, their capacities and enum values, `validate()` |
 //! | `message.rs` | [`Message`], [`init_zeroed`], [`init_reused`] |
 //! | `validate.rs` | [`Validate`], [`ValidationError`] |
+//! | `bounds.rs` | [`bounds`]: the plausibility bounds validation applies (world extent, yaw, pitch) |
 //! | `classes.rs` | the COCO class table |
 //! | `contract/` | [`contract`]: every topic's service name, type name, size, alignment, field offsets and units, and the generated C header and Python module |
 //! | `include/vpsom_topics.h`, `python/vpsom_topics.py` | generated from [`contract`], committed |
@@ -58,6 +61,7 @@
 // `// SAFETY:` comment (`clippy::undocumented_unsafe_blocks`, from the workspace lints).
 #![allow(unsafe_code)]
 
+pub mod bounds;
 mod classes;
 pub mod contract;
 mod message;
