@@ -7,9 +7,9 @@
 //! (`UPDATE_CONTRACT=1 cargo test --release -p shm_types --test contract`) and add the field's
 //! unit to `contract/describe.rs` (the build fails until every field is listed there).
 
+use crate::ClassId;
 use crate::bounds::{MAX_PITCH_RAD, MAX_WORLD_COORD_M, MAX_YAW_RAD};
 use crate::validate::{Checker, Field, Validate, ValidationError};
-use crate::{AnyBitPattern, ClassId, ZeroValid};
 use iceoryx2::prelude::ZeroCopySend;
 
 /// Largest depth image: 640 × 480 (the paper's Kinect v2 is 512 × 424; smaller sizes by config).
@@ -34,7 +34,7 @@ pub const MAX_CANDIDATES: usize = 64;
 pub const THREAD_NAME_LEN: usize = 32;
 
 /// Common header of every message.
-#[derive(Debug, Clone, Copy, Default, PartialEq, ZeroCopySend)]
+#[derive(Debug, Clone, Copy, Default, PartialEq, ZeroCopySend, bytemuck::AnyBitPattern)]
 #[repr(C)]
 #[type_name("vpsom::Header")]
 pub struct Header {
@@ -47,7 +47,7 @@ pub struct Header {
 }
 
 /// A rigid transform `parent_from_child`: translation and unit quaternion `[x, y, z, w]`.
-#[derive(Debug, Clone, Copy, PartialEq, ZeroCopySend)]
+#[derive(Debug, Clone, Copy, PartialEq, ZeroCopySend, bytemuck::AnyBitPattern)]
 #[repr(C)]
 #[type_name("vpsom::Pose3")]
 pub struct Pose3 {
@@ -87,7 +87,7 @@ impl Pose3 {
 }
 
 /// Pinhole intrinsics of the depth camera (pixels) and its valid range (metres).
-#[derive(Debug, Clone, Copy, Default, PartialEq, ZeroCopySend)]
+#[derive(Debug, Clone, Copy, Default, PartialEq, ZeroCopySend, bytemuck::AnyBitPattern)]
 #[repr(C)]
 #[type_name("vpsom::Intrinsics")]
 pub struct Intrinsics {
@@ -105,8 +105,9 @@ pub struct Intrinsics {
     pub max_range: f32,
 }
 
-/// One depth image, `u16` millimetres, 0 = invalid.
-#[derive(Debug, ZeroCopySend)]
+/// One depth image, `u16` millimetres, 0 = invalid. (`Copy` only because
+/// `bytemuck::AnyBitPattern` requires it: never copy one by value, see [`crate::AnyBitPattern`].)
+#[derive(Debug, Clone, Copy, ZeroCopySend, bytemuck::AnyBitPattern)]
 #[repr(C)]
 #[type_name("vpsom::DepthFrame")]
 pub struct DepthFrame {
@@ -175,7 +176,11 @@ impl Validate for DepthFrame {
 }
 
 /// One detected instance.
-#[derive(Debug, Clone, Copy, Default, PartialEq, ZeroCopySend)]
+// `Pod` (no padding, any bits), not only `AnyBitPattern`: bytemuck makes an array
+// `AnyBitPattern` only through `Pod`, and `Detections` holds `[Detection; 64]`.
+#[derive(
+    Debug, Clone, Copy, Default, PartialEq, ZeroCopySend, bytemuck::Pod, bytemuck::Zeroable,
+)]
 #[repr(C)]
 #[type_name("vpsom::Detection")]
 pub struct Detection {
@@ -191,8 +196,9 @@ pub struct Detection {
     pub mask_pixels: u32,
 }
 
-/// Instance detections for one depth frame, with an instance label image.
-#[derive(Debug, ZeroCopySend)]
+/// Instance detections for one depth frame, with an instance label image. (`Copy` only because
+/// `bytemuck::AnyBitPattern` requires it: never copy one by value.)
+#[derive(Debug, Clone, Copy, ZeroCopySend, bytemuck::AnyBitPattern)]
 #[repr(C)]
 #[type_name("vpsom::Detections")]
 pub struct Detections {
@@ -372,7 +378,7 @@ pub mod nav_status {
 }
 
 /// State of the robot: base pose, neck, odometry uncertainty, localization and navigation status.
-#[derive(Debug, Clone, Copy, Default, PartialEq, ZeroCopySend)]
+#[derive(Debug, Clone, Copy, Default, PartialEq, ZeroCopySend, bytemuck::Zeroable)]
 #[repr(C)]
 #[type_name("vpsom::RobotState")]
 pub struct RobotState {
@@ -447,7 +453,7 @@ pub mod sopm_shape {
 }
 
 /// One object of the sparse object map.
-#[derive(Debug, Clone, Copy, ZeroCopySend)]
+#[derive(Debug, Clone, Copy, ZeroCopySend, bytemuck::Zeroable)]
 #[repr(C)]
 #[type_name("vpsom::MapObject")]
 pub struct MapObject {
@@ -597,7 +603,7 @@ impl MapObject {
 }
 
 /// The sparse object map: one cuboid per object, with the per-object view-planning information.
-#[derive(Debug, ZeroCopySend)]
+#[derive(Debug, ZeroCopySend, bytemuck::Zeroable)]
 #[repr(C)]
 #[type_name("vpsom::ObjectMap")]
 pub struct ObjectMap {
@@ -696,7 +702,7 @@ pub mod grid_cell {
 
 /// A 2D occupancy grid in the world frame: the navigation map (obstacles only) or the
 /// depth-built exploration grid (with unknown cells, for frontiers).
-#[derive(Debug, ZeroCopySend)]
+#[derive(Debug, ZeroCopySend, bytemuck::Zeroable)]
 #[repr(C)]
 #[type_name("vpsom::OccupancyGrid")]
 pub struct OccupancyGrid {
@@ -777,7 +783,7 @@ pub mod goal_kind {
 }
 
 /// A chassis goal.
-#[derive(Debug, Clone, Copy, Default, PartialEq, ZeroCopySend)]
+#[derive(Debug, Clone, Copy, Default, PartialEq, ZeroCopySend, bytemuck::Zeroable)]
 #[repr(C)]
 #[type_name("vpsom::NavGoal")]
 pub struct NavGoal {
@@ -811,7 +817,7 @@ impl Validate for NavGoal {
 }
 
 /// A neck (sensor) goal relative to the base.
-#[derive(Debug, Clone, Copy, Default, PartialEq, ZeroCopySend)]
+#[derive(Debug, Clone, Copy, Default, PartialEq, ZeroCopySend, bytemuck::Zeroable)]
 #[repr(C)]
 #[type_name("vpsom::NeckGoal")]
 pub struct NeckGoal {
@@ -844,7 +850,7 @@ impl Validate for NeckGoal {
 }
 
 /// One record of a deadline monitor (periodic executor cycle).
-#[derive(Debug, Clone, Copy, Default, PartialEq, ZeroCopySend)]
+#[derive(Debug, Clone, Copy, Default, PartialEq, ZeroCopySend, bytemuck::Zeroable)]
 #[repr(C)]
 #[type_name("vpsom::DeadlineEvent")]
 pub struct DeadlineEvent {
@@ -931,7 +937,7 @@ impl Validate for DeadlineEvent {
 }
 
 /// One evaluated candidate view with every term of F(v) (paper eqs. 1–4).
-#[derive(Debug, Clone, Copy, Default, PartialEq, ZeroCopySend)]
+#[derive(Debug, Clone, Copy, Default, PartialEq, ZeroCopySend, bytemuck::Zeroable)]
 #[repr(C)]
 #[type_name("vpsom::Candidate")]
 pub struct Candidate {
@@ -1019,7 +1025,7 @@ pub mod planner_state {
 }
 
 /// A planner decision: the evaluated candidates of one GBV round or LBV cycle.
-#[derive(Debug, ZeroCopySend)]
+#[derive(Debug, ZeroCopySend, bytemuck::Zeroable)]
 #[repr(C)]
 #[type_name("vpsom::PlannerDecision")]
 pub struct PlannerDecision {
@@ -1097,7 +1103,7 @@ impl Validate for PlannerDecision {
 
 /// How much of one ground-truth object a rendered frame shows (one entry of
 /// [`FrameVisibility`]). Ground truth: for evaluation only.
-#[derive(Debug, Clone, Copy, Default, PartialEq, ZeroCopySend)]
+#[derive(Debug, Clone, Copy, Default, PartialEq, ZeroCopySend, bytemuck::Zeroable)]
 #[repr(C)]
 #[type_name("vpsom::ObjectVisibility")]
 pub struct ObjectVisibility {
@@ -1119,7 +1125,7 @@ pub struct ObjectVisibility {
 /// Per rendered frame, the visibility of every ground-truth foreground object in the camera's
 /// view (`sim/visibility`, evaluation only; which objects count is the simulator's
 /// `Sim::visibility`, the metric is `nodes::eval::occlusion`).
-#[derive(Debug, Clone, Copy, ZeroCopySend)]
+#[derive(Debug, Clone, Copy, ZeroCopySend, bytemuck::Zeroable)]
 #[repr(C)]
 #[type_name("vpsom::FrameVisibility")]
 pub struct FrameVisibility {
@@ -1157,43 +1163,6 @@ impl Validate for FrameVisibility {
         Ok(())
     }
 }
-
-// SAFETY (all impls below): each type is `#[repr(C)]` and made only of integers, floats and
-// arrays/structs thereof, for which the all-zero bit pattern is valid.
-macro_rules! zero_valid {
-    ($($t:ty),*) => { $(
-        // SAFETY: see the comment above the macro; `$t` is plain old data.
-        unsafe impl ZeroValid for $t {}
-    )* };
-}
-zero_valid!(
-    Header,
-    Pose3,
-    Intrinsics,
-    DepthFrame,
-    Detection,
-    Detections,
-    RobotState,
-    MapObject,
-    ObjectMap,
-    OccupancyGrid,
-    NavGoal,
-    NeckGoal,
-    DeadlineEvent,
-    Candidate,
-    PlannerDecision,
-    ObjectVisibility,
-    FrameVisibility
-);
-
-// SAFETY: `DepthFrame` is `#[repr(C)]` of a `Header` (three `u64`), `u32`s, `Intrinsics` (six
-// `f32`), `Pose3` (seven `f32`) and a `u16` array; `Detections` of a `Header`, a `u64`, `u32`s,
-// an array of `Detection` (`u16`s, an `f32`, a `u16` array, a `u32`) and a `u8` array. Integers
-// and floats accept every bit pattern (a stale float may be NaN, which is a valid `f32`); there
-// are no `bool`s, enums, pointers or niches.
-unsafe impl AnyBitPattern for DepthFrame {}
-// SAFETY: see `DepthFrame` above.
-unsafe impl AnyBitPattern for Detections {}
 
 #[cfg(test)]
 mod tests {
