@@ -78,6 +78,9 @@ struct Outcome {
     nonfinite: bool,
 }
 
+/// A parser under test: the input's file name and text in, the outcome out.
+type Target = fn(&Path, &str) -> Outcome;
+
 fn run_config(file: &Path, text: &str) -> Outcome {
     match Config::parse(file, text) {
         Ok(cfg) => Outcome {
@@ -269,8 +272,7 @@ fn main() -> anyhow::Result<()> {
     }
 
     let file = Path::new("fuzz-input.toml");
-    let targets: [(&str, fn(&Path, &str) -> Outcome); 2] =
-        [("config", run_config), ("scene", run_scene)];
+    let targets: [(&str, Target); 2] = [("config", run_config), ("scene", run_scene)];
     // A target whose accepted seeds already hold NaN/inf cannot use the non-finite oracle.
     let mut nonfinite_ok = [false; 2];
     for (t, (target, run)) in targets.iter().enumerate() {

@@ -438,15 +438,17 @@ fn check_planner(
     }
 }
 
-fn planner_case() -> impl Strategy<
-    Value = (
-        Vec<ObjSpec>,
-        [f32; 2],
-        [f32; 3],
-        (f32, f32),
-        (u32, f32, u8, u8),
-    ),
-> {
+/// A planner case: map objects, where (`far`), base pose, neck, grid (cells per side,
+/// resolution, nav pattern, explore pattern).
+type PlannerCase = (
+    Vec<ObjSpec>,
+    [f32; 2],
+    [f32; 3],
+    (f32, f32),
+    (u32, f32, u8, u8),
+);
+
+fn planner_case() -> impl Strategy<Value = PlannerCase> {
     (
         prop::collection::vec(obj_spec(), 0..10),
         [

@@ -144,9 +144,9 @@ impl DepthFrame {
     }
 }
 
-/// Rules: `width` ≤ [`MAX_WIDTH`], `height` ≤ [`MAX_HEIGHT`]; intrinsics finite, focal lengths
-/// > 0, `0 ≤ min_range < max_range`; `camera_pose` a valid [`Pose3`] within the world bounds
-/// ([`crate::bounds`]). Depth values are data: every `u16` is a valid depth (0 = none).
+/// Rules: `width` ≤ [`MAX_WIDTH`], `height` ≤ [`MAX_HEIGHT`]; intrinsics finite, focal
+/// lengths positive, `0 ≤ min_range < max_range`; `camera_pose` a valid [`Pose3`] within the
+/// world bounds ([`crate::bounds`]). Depth values are data: every `u16` is a valid depth (0 = none).
 impl Validate for DepthFrame {
     fn validate(&self) -> Result<(), ValidationError> {
         let c = Checker {

@@ -31,7 +31,8 @@ use std::sync::{LazyLock, Mutex};
 /// Every scalar of type `name` as `(offset, scalar)`, nested structs expanded (computed once
 /// per type).
 fn scalars(name: &'static str) -> &'static [(usize, Scalar)] {
-    static ALL: LazyLock<Mutex<HashMap<&'static str, &'static [(usize, Scalar)]>>> =
+    type Scalars = &'static [(usize, Scalar)];
+    static ALL: LazyLock<Mutex<HashMap<&'static str, Scalars>>> =
         LazyLock::new(|| Mutex::new(HashMap::new()));
     let mut all = ALL.lock().unwrap_or_else(|e| e.into_inner());
     all.entry(name).or_insert_with(|| {
