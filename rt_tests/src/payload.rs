@@ -1,19 +1,21 @@
 //! Benchmark payloads of fixed total size (64 B, 8 KiB, 600 KiB, 4 MiB) for the `ipc` test, plus
 //! the one OS call the harness needs that has no safe wrapper (`kill(pid, SIGINT)`).
 //!
-//! This is the only module of `rt_tests` that allows `unsafe`: the payloads must implement
-//! `shm_types::ZeroValid` and `shm_types::AnyBitPattern` (`unsafe` marker traits) and iceoryx2's `ZeroCopySend` (whose derive
-//! expands to an `unsafe impl`). Each payload is `#[repr(C)]`: a [`Header`] (three `u64`) followed
-//! by a byte array, so every bit pattern is a valid value and the type holds no pointers.
+//! This is the only module of `rt_tests` that allows `unsafe`: the payloads derive iceoryx2's
+//! `ZeroCopySend` and bytemuck's `AnyBitPattern` (which make `shm_types::ZeroValid` and
+//! `shm_types::AnyBitPattern`; both derives expand to an `unsafe impl` after checking every
+//! field). Each payload is `#[repr(C)]`: a [`Header`] (three `u64`) followed by a byte array, so
+//! every bit pattern is a valid value and the type holds no pointers.
 
 use iceoryx2::prelude::ZeroCopySend;
-use shm_types::{AnyBitPattern, Header, Message, Validate, ValidationError, ZeroValid};
+use shm_types::{Header, Message, Validate, ValidationError};
 use std::fmt;
 
 macro_rules! payload {
     ($name:ident, $type_name:literal, $total:expr) => {
-        /// A benchmark message of this total size in bytes (header included).
-        #[derive(ZeroCopySend)]
+        /// A benchmark message of this total size in bytes (header included). (`Copy` because
+        /// `bytemuck::AnyBitPattern` requires it; never copied by value.)
+        #[derive(Clone, Copy, ZeroCopySend, bytemuck::AnyBitPattern)]
         #[repr(C)]
         #[type_name($type_name)]
         pub struct $name {
@@ -22,14 +24,6 @@ macro_rules! payload {
             /// Filler.
             pub data: [u8; $total - std::mem::size_of::<Header>()],
         }
-
-        // SAFETY: `#[repr(C)]` struct of a `Header` (three `u64`) and a `u8` array: no
-        // references, no niches; all-zero bytes are a valid value.
-        unsafe impl ZeroValid for $name {}
-
-        // SAFETY: as above, and integers accept every bit pattern, so any bytes are a valid
-        // value (no padding either: the sizes are multiples of 8).
-        unsafe impl AnyBitPattern for $name {}
 
         impl Message for $name {
             fn header(&self) -> &Header {

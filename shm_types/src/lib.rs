@@ -11,7 +11,9 @@
 //! - [`Pose3`] stores `parent_from_child` as a translation and a unit quaternion `[x, y, z, w]`;
 //! - angles are radians; times are nanoseconds.
 //!
-//! Every type implements [`Validate`], which rejects NaN/inf and out-of-range counts, and
+//! Every type implements [`Validate`], which rejects NaN/inf, out-of-range counts and values
+//! outside the documented rules (each type's `Validate` impl lists them; the plausibility bounds
+//! are in [`bounds`]), and
 //! [`ZeroValid`], which states that all-zero bytes are a valid value (so a loaned sample can be
 //! zero-filled in place and then written field by field, and lockstep hosts can heap-allocate one
 //! with [`boxed_zeroed`] without building it on the stack). The large frame types also implement
@@ -24,6 +26,7 @@
 //! | `messages.rs` | the message types, their capacities and enum values, `validate()` |
 //! | `message.rs` | [`Message`], [`init_zeroed`], [`init_reused`] |
 //! | `validate.rs` | [`Validate`], [`ValidationError`] |
+//! | `bounds.rs` | [`bounds`]: the plausibility bounds validation applies (world extent, yaw, pitch) |
 //! | `classes.rs` | the COCO class table |
 //! | `contract/` | [`contract`]: every topic's service name, type name, size, alignment, field offsets and units, and the generated C header and Python module |
 //! | `include/vpsom_topics.h`, `python/vpsom_topics.py` | generated from [`contract`], committed |
@@ -52,12 +55,13 @@
 //! `CLOCK_MONOTONIC`), keep every `reserved` byte 0, and expect a sample that fails
 //! [`Validate`] (NaN, counts past capacity, a non-unit quaternion) to be rejected and counted.
 
-// The workspace denies unsafe code; this crate is where it is the point: `ZeroCopySend`,
-// `ZeroValid` and `AnyBitPattern` are unsafe traits about the bytes of `#[repr(C)]` types, and
-// in-place initialisation writes through raw pointers. Every unsafe block still carries a
+// The workspace denies unsafe code; this crate is where it is the point: in-place
+// initialisation writes through raw pointers and trusts `ZeroValid`/`AnyBitPattern`, which
+// bytemuck's derives establish field by field. Every unsafe block still carries a
 // `// SAFETY:` comment (`clippy::undocumented_unsafe_blocks`, from the workspace lints).
 #![allow(unsafe_code)]
 
+pub mod bounds;
 mod classes;
 pub mod contract;
 mod message;
@@ -71,23 +75,73 @@ pub use validate::{Validate, ValidationError};
 
 use iceoryx2::prelude::ZeroCopySend;
 
-/// Marker for payloads whose all-zero bit pattern is a valid value.
+/// Payloads whose all-zero bit pattern is a valid value.
 ///
-/// # Safety
-/// Implement only for `#[repr(C)]` types built from integers, floats, `bool`s and arrays/structs of
-/// such types (no references, no `NonZero*`, no enums with a niche at zero).
-pub unsafe trait ZeroValid: Sized + ZeroCopySend {}
+/// Implemented for every type that is [`bytemuck::Zeroable`], which each message type derives
+/// (`#[derive(bytemuck::Zeroable)]`): the derive checks that **every field** is `Zeroable`, so a
+/// field whose all-zero bytes are not a value (a reference, a `NonZero*`, an enum without a
+/// zero variant, ...) fails to compile instead of making an unsound impl:
+///
+/// ```compile_fail,E0277
+/// #[repr(u8)]
+/// #[derive(Debug, Clone, Copy)]
+/// enum Mode { Idle = 1, Busy = 2 } // no variant is 0
+///
+/// #[derive(bytemuck::Zeroable)]
+/// #[repr(C)]
+/// struct Status { seq: u64, mode: Mode } // error: `Mode: Zeroable` is not satisfied
+/// ```
+///
+/// The same struct with a `u8` field compiles and is `ZeroValid`:
+///
+/// ```
+/// use iceoryx2::prelude::ZeroCopySend;
+///
+/// #[derive(Debug, ZeroCopySend, bytemuck::Zeroable)]
+/// #[repr(C)]
+/// struct Status { seq: u64, mode: u8 }
+///
+/// let s = shm_types::boxed_zeroed::<Status>();
+/// assert_eq!((s.seq, s.mode), (0, 0));
+/// ```
+pub trait ZeroValid: bytemuck::Zeroable + ZeroCopySend {}
 
-/// Marker for payloads for which **every** bit pattern of `size_of::<Self>()` initialised bytes
-/// is a valid value (not only all zeros), so memory that held an earlier value of the same type
-/// may be handed out as a `Self` without being cleared first ([`init_reused`]).
+impl<T: bytemuck::Zeroable + ZeroCopySend> ZeroValid for T {}
+
+/// Payloads for which **every** bit pattern of `size_of::<Self>()` initialised bytes is a valid
+/// value (not only all zeros), so memory that held an earlier value of the same type may be
+/// handed out as a `Self` without being cleared first ([`init_reused`]).
 ///
-/// # Safety
-/// Implement only for `#[repr(C)]` types made solely of integers, floats and arrays/structs of
-/// such types: no `bool`, `char`, enums, references, raw or function pointers, `NonZero*`, nor
-/// anything with a niche or a `Drop`. Padding bytes are allowed (a field is never read from
-/// another field's padding as long as the memory is only ever written as `Self`).
-pub unsafe trait AnyBitPattern: ZeroValid {}
+/// Implemented for every [`ZeroValid`] type that is [`bytemuck::AnyBitPattern`], which
+/// [`DepthFrame`] and [`Detections`] derive (`#[derive(bytemuck::AnyBitPattern)]`, which also
+/// derives `Zeroable`): the derive checks that every field is `AnyBitPattern` (integers, floats,
+/// arrays and structs of them), so a `bool`, `char`, enum, reference or pointer field fails to
+/// compile:
+///
+/// ```compile_fail,E0277
+/// #[derive(Debug, Clone, Copy, bytemuck::AnyBitPattern)]
+/// #[repr(C)]
+/// struct Frame { seq: u64, valid: bool } // error: `bool: AnyBitPattern` is not satisfied
+/// ```
+///
+/// With a `u8` in its place it compiles and is `AnyBitPattern`:
+///
+/// ```
+/// use iceoryx2::prelude::ZeroCopySend;
+///
+/// #[derive(Debug, Clone, Copy, ZeroCopySend, bytemuck::AnyBitPattern)]
+/// #[repr(C)]
+/// struct Frame { seq: u64, valid: u8 }
+///
+/// fn reusable<T: shm_types::AnyBitPattern>() {}
+/// reusable::<Frame>();
+/// ```
+///
+/// (`bytemuck::AnyBitPattern` requires `Copy`: `DepthFrame` and `Detections` are `Copy`, but are
+/// ~600 KB and ~300 KB; keep them behind a `Box` or in a sample and never copy one by value.)
+pub trait AnyBitPattern: ZeroValid + bytemuck::AnyBitPattern {}
+
+impl<T: ZeroValid + bytemuck::AnyBitPattern> AnyBitPattern for T {}
 
 /// A heap-allocated, zero-initialised `T`, built without a stack temporary (a `DepthFrame` is
 /// ~1 MB). Used by in-process (lockstep) hosting and by tests.

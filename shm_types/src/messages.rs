@@ -7,8 +7,9 @@
 //! (`UPDATE_CONTRACT=1 cargo test --release -p shm_types --test contract`) and add the field's
 //! unit to `contract/describe.rs` (the build fails until every field is listed there).
 
+use crate::ClassId;
+use crate::bounds::{MAX_PITCH_RAD, MAX_WORLD_COORD_M, MAX_YAW_RAD};
 use crate::validate::{Checker, Field, Validate, ValidationError};
-use crate::{AnyBitPattern, ClassId, ZeroValid};
 use iceoryx2::prelude::ZeroCopySend;
 
 /// Largest depth image: 640 × 480 (the paper's Kinect v2 is 512 × 424; smaller sizes by config).
@@ -33,7 +34,7 @@ pub const MAX_CANDIDATES: usize = 64;
 pub const THREAD_NAME_LEN: usize = 32;
 
 /// Common header of every message.
-#[derive(Debug, Clone, Copy, Default, PartialEq, ZeroCopySend)]
+#[derive(Debug, Clone, Copy, Default, PartialEq, ZeroCopySend, bytemuck::AnyBitPattern)]
 #[repr(C)]
 #[type_name("vpsom::Header")]
 pub struct Header {
@@ -46,7 +47,7 @@ pub struct Header {
 }
 
 /// A rigid transform `parent_from_child`: translation and unit quaternion `[x, y, z, w]`.
-#[derive(Debug, Clone, Copy, PartialEq, ZeroCopySend)]
+#[derive(Debug, Clone, Copy, PartialEq, ZeroCopySend, bytemuck::AnyBitPattern)]
 #[repr(C)]
 #[type_name("vpsom::Pose3")]
 pub struct Pose3 {
@@ -69,8 +70,10 @@ impl Pose3 {
         rotation: [0.0, 0.0, 0.0, 1.0],
     };
 
+    /// Translation finite and within [`MAX_WORLD_COORD_M`]; rotation finite with norm² within
+    /// 1e-3 of 1.
     fn check(&self, c: &Checker, field: &'static str) -> Result<(), ValidationError> {
-        c.finite(field, &self.translation)?;
+        c.within(field, &self.translation, MAX_WORLD_COORD_M)?;
         c.finite(field, &self.rotation)?;
         let n2: f32 = self.rotation.iter().map(|q| q * q).sum();
         if (n2 - 1.0).abs() > 1e-3 {
@@ -84,7 +87,7 @@ impl Pose3 {
 }
 
 /// Pinhole intrinsics of the depth camera (pixels) and its valid range (metres).
-#[derive(Debug, Clone, Copy, Default, PartialEq, ZeroCopySend)]
+#[derive(Debug, Clone, Copy, Default, PartialEq, ZeroCopySend, bytemuck::AnyBitPattern)]
 #[repr(C)]
 #[type_name("vpsom::Intrinsics")]
 pub struct Intrinsics {
@@ -102,8 +105,9 @@ pub struct Intrinsics {
     pub max_range: f32,
 }
 
-/// One depth image, `u16` millimetres, 0 = invalid.
-#[derive(Debug, ZeroCopySend)]
+/// One depth image, `u16` millimetres, 0 = invalid. (`Copy` only because
+/// `bytemuck::AnyBitPattern` requires it: never copy one by value, see [`crate::AnyBitPattern`].)
+#[derive(Debug, Clone, Copy, ZeroCopySend, bytemuck::AnyBitPattern)]
 #[repr(C)]
 #[type_name("vpsom::DepthFrame")]
 pub struct DepthFrame {
@@ -140,6 +144,9 @@ impl DepthFrame {
     }
 }
 
+/// Rules: `width` ≤ [`MAX_WIDTH`], `height` ≤ [`MAX_HEIGHT`]; intrinsics finite, focal
+/// lengths positive, `0 ≤ min_range < max_range`; `camera_pose` a valid [`Pose3`] within the
+/// world bounds ([`crate::bounds`]). Depth values are data: every `u16` is a valid depth (0 = none).
 impl Validate for DepthFrame {
     fn validate(&self) -> Result<(), ValidationError> {
         let c = Checker {
@@ -169,7 +176,11 @@ impl Validate for DepthFrame {
 }
 
 /// One detected instance.
-#[derive(Debug, Clone, Copy, Default, PartialEq, ZeroCopySend)]
+// `Pod` (no padding, any bits), not only `AnyBitPattern`: bytemuck makes an array
+// `AnyBitPattern` only through `Pod`, and `Detections` holds `[Detection; 64]`.
+#[derive(
+    Debug, Clone, Copy, Default, PartialEq, ZeroCopySend, bytemuck::Pod, bytemuck::Zeroable,
+)]
 #[repr(C)]
 #[type_name("vpsom::Detection")]
 pub struct Detection {
@@ -185,8 +196,9 @@ pub struct Detection {
     pub mask_pixels: u32,
 }
 
-/// Instance detections for one depth frame, with an instance label image.
-#[derive(Debug, ZeroCopySend)]
+/// Instance detections for one depth frame, with an instance label image. (`Copy` only because
+/// `bytemuck::AnyBitPattern` requires it: never copy one by value.)
+#[derive(Debug, Clone, Copy, ZeroCopySend, bytemuck::AnyBitPattern)]
 #[repr(C)]
 #[type_name("vpsom::Detections")]
 pub struct Detections {
@@ -229,6 +241,17 @@ impl Detections {
     }
 }
 
+/// Rules: `width` ≤ [`MAX_WIDTH`], `height` ≤ [`MAX_HEIGHT`], `count` ≤ [`MAX_DETECTIONS`],
+/// `masks` one of [`mask_mode`]. Each of the first `count` items: `score` in `[0, 1]`,
+/// `class_id` in the COCO table, `bbox` not inverted (`x0 ≤ x1`, `y0 ≤ y1`) and inside the
+/// image (`x1 ≤ width`, `y1 ≤ height`).
+/// - [`mask_mode::BOXES`]: every `mask_pixels` is 0; `label` and the label image are unused and
+///   not checked.
+/// - [`mask_mode::MASKS`]: every `label` is in `1..=255` (the label image is `u8`) and differs
+///   from the other items' labels; every pixel of the label image's first `width × height` is 0
+///   or some item's `label`; each item's `mask_pixels` is at most `width × height` and equals
+///   the number of pixels that carry its label. (The box need not hold the whole mask: a
+///   detector's box is its own estimate.)
 impl Validate for Detections {
     fn validate(&self) -> Result<(), ValidationError> {
         let c = Checker {
@@ -238,7 +261,19 @@ impl Validate for Detections {
         c.count("height", self.height as usize, MAX_HEIGHT)?;
         c.count("count", self.count as usize, MAX_DETECTIONS)?;
         c.count("masks", self.masks as usize, mask_mode::MASKS as usize)?;
+        if self.masks == mask_mode::MASKS {
+            self.check_masks(&c)?;
+        }
         for (k, d) in self.detections().iter().enumerate() {
+            if self.masks == mask_mode::BOXES && d.mask_pixels != 0 {
+                return Err(c.err(
+                    Field::item("items", k, "mask_pixels"),
+                    format!(
+                        "{} in boxes mode (masks = 0 carries no masks)",
+                        d.mask_pixels
+                    ),
+                ));
+            }
             c.range(Field::item("items", k, "score"), d.score, 0.0, 1.0)?;
             c.count(
                 Field::item("items", k, "class_id"),
@@ -266,6 +301,62 @@ impl Validate for Detections {
     }
 }
 
+impl Detections {
+    /// The masks-mode rules of [`Validate`]: labels unique in `1..=255`, every label-image
+    /// value some item's label, `mask_pixels` the pixel count of that label. Uses 1.3 KB of
+    /// stack, no heap.
+    fn check_masks(&self, c: &Checker) -> Result<(), ValidationError> {
+        // Item index + 1 of each label value (0: no item has it).
+        let mut item_of = [0u8; 256];
+        for (k, d) in self.detections().iter().enumerate() {
+            let field = Field::item("items", k, "label");
+            if d.label == 0 || d.label > 255 {
+                return Err(c.err(
+                    field,
+                    format!("{} (masks mode: labels are 1..=255)", d.label),
+                ));
+            }
+            let l = d.label as usize;
+            if item_of[l] != 0 {
+                return Err(c.err(
+                    field,
+                    format!("{} is also items[{}].label", d.label, item_of[l] - 1),
+                ));
+            }
+            item_of[l] = k as u8 + 1;
+        }
+        let mut pixels = [0u32; 256];
+        for &v in self.label_pixels() {
+            pixels[v as usize] += 1;
+        }
+        if let Some(v) = (1..256).find(|&v| pixels[v] > 0 && item_of[v] == 0) {
+            return Err(c.err(
+                "labels",
+                format!(
+                    "value {v} (on {} pixels) is no item's label ({} items)",
+                    pixels[v], self.count
+                ),
+            ));
+        }
+        let image = self.label_pixels().len();
+        for (k, d) in self.detections().iter().enumerate() {
+            let field = Field::item("items", k, "mask_pixels");
+            c.count(field, d.mask_pixels as usize, image)?;
+            let n = pixels[d.label as usize];
+            if d.mask_pixels != n {
+                return Err(c.err(
+                    field,
+                    format!(
+                        "{} but the label image has {n} pixels of label {}",
+                        d.mask_pixels, d.label
+                    ),
+                ));
+            }
+        }
+        Ok(())
+    }
+}
+
 /// Values of [`Detections::masks`].
 pub mod mask_mode {
     /// Boxes only (YOLO-class detector): the label image is unused.
@@ -287,7 +378,7 @@ pub mod nav_status {
 }
 
 /// State of the robot: base pose, neck, odometry uncertainty, localization and navigation status.
-#[derive(Debug, Clone, Copy, Default, PartialEq, ZeroCopySend)]
+#[derive(Debug, Clone, Copy, Default, PartialEq, ZeroCopySend, bytemuck::Zeroable)]
 #[repr(C)]
 #[type_name("vpsom::RobotState")]
 pub struct RobotState {
@@ -317,16 +408,32 @@ pub struct RobotState {
     pub localization_failures: u32,
 }
 
+/// Rules: `base_pose` x, y within [`MAX_WORLD_COORD_M`] and yaw within [`MAX_YAW_RAD`];
+/// `neck_yaw` within [`MAX_YAW_RAD`], `neck_pitch` within [`MAX_PITCH_RAD`]; `odom_cov` finite
+/// with a non-negative diagonal; `speed` finite; `distance_m` finite and ≥ 0;
+/// `localization_ok` 0 or 1; `nav_status` one of [`nav_status`].
 impl Validate for RobotState {
     fn validate(&self) -> Result<(), ValidationError> {
         let c = Checker {
             message: "RobotState",
         };
-        c.finite("base_pose", &self.base_pose)?;
-        c.finite("neck", &[self.neck_yaw, self.neck_pitch])?;
+        c.within("base_pose", &self.base_pose[..2], MAX_WORLD_COORD_M)?;
+        c.within("base_pose.yaw", &self.base_pose[2..], MAX_YAW_RAD)?;
+        c.within("neck_yaw", &[self.neck_yaw], MAX_YAW_RAD)?;
+        c.within("neck_pitch", &[self.neck_pitch], MAX_PITCH_RAD)?;
         c.finite("odom_cov", &self.odom_cov)?;
-        c.finite("speed", &[self.speed, self.distance_m])?;
-        c.count("localization_ok", self.localization_ok as usize, 1)?;
+        if let Some(i) = [0, 4, 8].into_iter().find(|i| self.odom_cov[*i] < 0.0) {
+            return Err(c.err(
+                "odom_cov",
+                format!(
+                    "diagonal element {i} is {} (a variance is >= 0)",
+                    self.odom_cov[i]
+                ),
+            ));
+        }
+        c.finite("speed", &[self.speed])?;
+        c.range("distance_m", self.distance_m, 0.0, f32::MAX)?;
+        c.flag("localization_ok", self.localization_ok)?;
         c.count(
             "nav_status",
             self.nav_status as usize,
@@ -346,7 +453,7 @@ pub mod sopm_shape {
 }
 
 /// One object of the sparse object map.
-#[derive(Debug, Clone, Copy, ZeroCopySend)]
+#[derive(Debug, Clone, Copy, ZeroCopySend, bytemuck::Zeroable)]
 #[repr(C)]
 #[type_name("vpsom::MapObject")]
 pub struct MapObject {
@@ -428,14 +535,27 @@ impl MapObject {
         self.complete != 0
     }
 
+    /// The per-object rules of [`ObjectMap`]'s [`Validate`] (object `k`).
     fn check(&self, c: &Checker, k: usize) -> Result<(), ValidationError> {
         let f = |name: &'static str| Field::item("objects", k, name);
-        c.finite(f("center"), &self.center)?;
-        c.finite(f("size"), &self.size)?;
+        c.within(f("center"), &self.center, MAX_WORLD_COORD_M)?;
+        c.within(f("size"), &self.size, MAX_WORLD_COORD_M)?;
         if self.size.iter().any(|s| *s < 0.0) {
             return Err(c.err(f("size"), format!("{:?} has a negative extent", self.size)));
         }
-        c.finite(f("yaw"), &[self.yaw])?;
+        c.within(f("yaw"), &[self.yaw], MAX_YAW_RAD)?;
+        c.flag(f("background"), self.background)?;
+        c.flag(f("complete"), self.complete)?;
+        c.cluster(f("cluster_id"), self.cluster_id)?;
+        if self.is_background() && i64::from(self.cluster_id) != i64::from(self.id) {
+            return Err(c.err(
+                f("cluster_id"),
+                format!(
+                    "{} on background object {} (a background object anchors its own cluster)",
+                    self.cluster_id, self.id
+                ),
+            ));
+        }
         c.range(f("h_sopm"), self.h_sopm, 0.0, 1.0 + 1e-4)?;
         c.range(f("c_asso"), self.c_asso, 0.0, 1.0)?;
         c.finite(f("l_best"), &self.l_best)?;
@@ -449,6 +569,15 @@ impl MapObject {
             self.sopm_rows as usize * self.sopm_cols as usize,
             MAX_SOPM_CELLS,
         )?;
+        if (self.sopm_rows == 0) != (self.sopm_cols == 0) {
+            return Err(c.err(
+                f("sopm_cells"),
+                format!(
+                    "{} rows x {} cols (a SOPM has both or neither)",
+                    self.sopm_rows, self.sopm_cols
+                ),
+            ));
+        }
         c.count(
             f("sample_count"),
             self.sample_count as usize,
@@ -465,15 +594,16 @@ impl MapObject {
             }
         }
         for (p, l) in self.samples() {
-            c.finite(f("points"), p)?;
-            c.finite(f("point_los"), l)?;
+            c.within(f("points"), p, MAX_WORLD_COORD_M)?;
+            // A mean of unit vectors, normalised or not: each component within [-1, 1].
+            c.within(f("point_los"), l, 1.0 + 1e-3)?;
         }
         Ok(())
     }
 }
 
 /// The sparse object map: one cuboid per object, with the per-object view-planning information.
-#[derive(Debug, ZeroCopySend)]
+#[derive(Debug, ZeroCopySend, bytemuck::Zeroable)]
 #[repr(C)]
 #[type_name("vpsom::ObjectMap")]
 pub struct ObjectMap {
@@ -524,6 +654,19 @@ impl ObjectMap {
     }
 }
 
+/// Rules: `count` ≤ [`MAX_OBJECTS`], `eps_sopm` in `[0, 1]`, object ids unique. Each of the
+/// first `count` objects: `center` within [`MAX_WORLD_COORD_M`]; `size` non-negative and within
+/// it; `yaw` within [`MAX_YAW_RAD`]; `background` and `complete` 0 or 1; `class_id` in the COCO
+/// table; `cluster_id` ≥ -1, and a background object's equal to its own `id`; `h_sopm` in
+/// `[0, 1]` (1e-4 slack), `c_asso` in `[0, 1]`; `l_best` finite; `sopm_shape` one of
+/// [`sopm_shape`]; `sopm_rows × sopm_cols` ≤ [`MAX_SOPM_CELLS`], both zero (no SOPM yet) or both
+/// non-zero; every used `sopm_prob` in `[0, 1]`; `sample_count` ≤ [`MAX_OBJECT_POINTS`]; each
+/// used point within [`MAX_WORLD_COORD_M`] and each component of its `point_los` within
+/// `[-1, 1]` (1e-3 slack).
+///
+/// Not checked: that a foreground object's `cluster_id` names a background object of the same
+/// message. The map is cut at [`MAX_OBJECTS`], which may leave out the background object, and a
+/// cluster without it is still a well-defined set of objects to its receivers.
 impl Validate for ObjectMap {
     fn validate(&self) -> Result<(), ValidationError> {
         let c = Checker {
@@ -531,14 +674,23 @@ impl Validate for ObjectMap {
         };
         c.count("count", self.count as usize, MAX_OBJECTS)?;
         c.range("eps_sopm", self.eps_sopm, 0.0, 1.0)?;
-        for (k, o) in self.objects().iter().enumerate() {
+        let objects = self.objects();
+        for (k, o) in objects.iter().enumerate() {
             o.check(&c, k)?;
+            if let Some(j) = objects[..k].iter().position(|p| p.id == o.id) {
+                return Err(c.err(
+                    Field::item("objects", k, "id"),
+                    format!("{} is also objects[{j}].id", o.id),
+                ));
+            }
         }
         Ok(())
     }
 }
 
-/// Cell values of an [`OccupancyGrid`].
+/// Cell values of an [`OccupancyGrid`]. Values `1..=99` between [`FREE`](grid_cell::FREE) and
+/// [`OCCUPIED`](grid_cell::OCCUPIED) are occupancy percentages (as in a ROS
+/// `nav_msgs/OccupancyGrid`; our receivers take `< 50` as free); `101..=254` are invalid.
 pub mod grid_cell {
     /// Free space.
     pub const FREE: u8 = 0;
@@ -550,7 +702,7 @@ pub mod grid_cell {
 
 /// A 2D occupancy grid in the world frame: the navigation map (obstacles only) or the
 /// depth-built exploration grid (with unknown cells, for frontiers).
-#[derive(Debug, ZeroCopySend)]
+#[derive(Debug, ZeroCopySend, bytemuck::Zeroable)]
 #[repr(C)]
 #[type_name("vpsom::OccupancyGrid")]
 pub struct OccupancyGrid {
@@ -577,18 +729,46 @@ impl OccupancyGrid {
     }
 }
 
+/// Rules: `origin` within [`MAX_WORLD_COORD_M`]; `resolution` in `[1 mm, 10 m]`; `width` and
+/// `height` ≥ 1 with `width × height` ≤ [`MAX_GRID_CELLS`]; the far corner
+/// (`origin + (width, height) × resolution`) within [`MAX_WORLD_COORD_M`]; every used cell
+/// `0..=100` or [`grid_cell::UNKNOWN`].
 impl Validate for OccupancyGrid {
     fn validate(&self) -> Result<(), ValidationError> {
         let c = Checker {
             message: "OccupancyGrid",
         };
-        c.finite("origin", &self.origin)?;
+        c.within("origin", &self.origin, MAX_WORLD_COORD_M)?;
         c.range("resolution", self.resolution, 1e-3, 10.0)?;
+        for (field, n) in [("width", self.width), ("height", self.height)] {
+            if n == 0 {
+                return Err(c.err(field, "0 (a grid has at least one cell)".into()));
+            }
+        }
         c.count(
             "cells",
             self.width as usize * self.height as usize,
             MAX_GRID_CELLS,
-        )
+        )?;
+        let far = [
+            self.origin[0] + self.width as f32 * self.resolution,
+            self.origin[1] + self.height as f32 * self.resolution,
+        ];
+        c.within("far corner (origin + size)", &far, MAX_WORLD_COORD_M)?;
+        match self
+            .used()
+            .iter()
+            .position(|v| *v > grid_cell::OCCUPIED && *v != grid_cell::UNKNOWN)
+        {
+            None => Ok(()),
+            Some(i) => Err(c.err(
+                "cells",
+                format!(
+                    "cell {i} is {} (cells are 0..=100 or 255 = unknown)",
+                    self.used()[i]
+                ),
+            )),
+        }
     }
 }
 
@@ -603,7 +783,7 @@ pub mod goal_kind {
 }
 
 /// A chassis goal.
-#[derive(Debug, Clone, Copy, Default, PartialEq, ZeroCopySend)]
+#[derive(Debug, Clone, Copy, Default, PartialEq, ZeroCopySend, bytemuck::Zeroable)]
 #[repr(C)]
 #[type_name("vpsom::NavGoal")]
 pub struct NavGoal {
@@ -623,17 +803,21 @@ pub struct NavGoal {
     pub reserved: [u8; 3],
 }
 
+/// Rules: `pose` x, y within [`MAX_WORLD_COORD_M`] and yaw within [`MAX_YAW_RAD`]; `score`
+/// finite; `cluster_id` ≥ -1; `kind` one of [`goal_kind`].
 impl Validate for NavGoal {
     fn validate(&self) -> Result<(), ValidationError> {
         let c = Checker { message: "NavGoal" };
-        c.finite("pose", &self.pose)?;
+        c.within("pose", &self.pose[..2], MAX_WORLD_COORD_M)?;
+        c.within("pose.yaw", &self.pose[2..], MAX_YAW_RAD)?;
         c.finite("score", &[self.score])?;
+        c.cluster("cluster_id", self.cluster_id)?;
         c.count("kind", self.kind as usize, goal_kind::FRONTIER as usize)
     }
 }
 
 /// A neck (sensor) goal relative to the base.
-#[derive(Debug, Clone, Copy, Default, PartialEq, ZeroCopySend)]
+#[derive(Debug, Clone, Copy, Default, PartialEq, ZeroCopySend, bytemuck::Zeroable)]
 #[repr(C)]
 #[type_name("vpsom::NeckGoal")]
 pub struct NeckGoal {
@@ -653,17 +837,20 @@ pub struct NeckGoal {
     pub reserved: u32,
 }
 
+/// Rules: `yaw` within [`MAX_YAW_RAD`], `pitch` within [`MAX_PITCH_RAD`], `score` finite.
 impl Validate for NeckGoal {
     fn validate(&self) -> Result<(), ValidationError> {
         let c = Checker {
             message: "NeckGoal",
         };
-        c.finite("neck", &[self.yaw, self.pitch, self.score])
+        c.within("yaw", &[self.yaw], MAX_YAW_RAD)?;
+        c.within("pitch", &[self.pitch], MAX_PITCH_RAD)?;
+        c.finite("score", &[self.score])
     }
 }
 
 /// One record of a deadline monitor (periodic executor cycle).
-#[derive(Debug, Clone, Copy, Default, PartialEq, ZeroCopySend)]
+#[derive(Debug, Clone, Copy, Default, PartialEq, ZeroCopySend, bytemuck::Zeroable)]
 #[repr(C)]
 #[type_name("vpsom::DeadlineEvent")]
 pub struct DeadlineEvent {
@@ -722,6 +909,8 @@ impl DeadlineEvent {
     }
 }
 
+/// Rules: `missed`, `sched_stats`, `backup_wake` 0 or 1; `miss_cause` one of [`miss_cause`];
+/// `period_ns` > 0.
 impl Validate for DeadlineEvent {
     fn validate(&self) -> Result<(), ValidationError> {
         let c = Checker {
@@ -748,7 +937,7 @@ impl Validate for DeadlineEvent {
 }
 
 /// One evaluated candidate view with every term of F(v) (paper eqs. 1–4).
-#[derive(Debug, Clone, Copy, Default, PartialEq, ZeroCopySend)]
+#[derive(Debug, Clone, Copy, Default, PartialEq, ZeroCopySend, bytemuck::Zeroable)]
 #[repr(C)]
 #[type_name("vpsom::Candidate")]
 pub struct Candidate {
@@ -836,7 +1025,7 @@ pub mod planner_state {
 }
 
 /// A planner decision: the evaluated candidates of one GBV round or LBV cycle.
-#[derive(Debug, ZeroCopySend)]
+#[derive(Debug, ZeroCopySend, bytemuck::Zeroable)]
 #[repr(C)]
 #[type_name("vpsom::PlannerDecision")]
 pub struct PlannerDecision {
@@ -869,12 +1058,17 @@ impl PlannerDecision {
     }
 }
 
+/// Rules: `count` ≤ [`MAX_CANDIDATES`]; `cluster_id` ≥ -1; `kind` one of [`decision_kind`],
+/// `state` one of [`planner_state`]. Each of the first `count` candidates: `position` within
+/// [`MAX_WORLD_COORD_M`], `yaw` within [`MAX_YAW_RAD`], `pitch` within [`MAX_PITCH_RAD`], every
+/// term finite, `chosen` and `dropped` 0 or 1.
 impl Validate for PlannerDecision {
     fn validate(&self) -> Result<(), ValidationError> {
         let c = Checker {
             message: "PlannerDecision",
         };
         c.count("count", self.count as usize, MAX_CANDIDATES)?;
+        c.cluster("cluster_id", self.cluster_id)?;
         c.count("kind", self.kind as usize, decision_kind::LBV as usize)?;
         c.count(
             "state",
@@ -895,8 +1089,13 @@ impl Validate for PlannerDecision {
                 v.n_cp,
                 v.cos_theta_c,
             ];
-            c.finite(Field::item("candidates", k, "position"), &v.position)?;
-            c.finite(Field::item("candidates", k, "terms"), &terms)?;
+            let f = |name: &'static str| Field::item("candidates", k, name);
+            c.within(f("position"), &v.position, MAX_WORLD_COORD_M)?;
+            c.finite(f("terms"), &terms)?;
+            c.within(f("yaw"), &[v.yaw], MAX_YAW_RAD)?;
+            c.within(f("pitch"), &[v.pitch], MAX_PITCH_RAD)?;
+            c.flag(f("chosen"), v.chosen)?;
+            c.flag(f("dropped"), v.dropped)?;
         }
         Ok(())
     }
@@ -904,7 +1103,7 @@ impl Validate for PlannerDecision {
 
 /// How much of one ground-truth object a rendered frame shows (one entry of
 /// [`FrameVisibility`]). Ground truth: for evaluation only.
-#[derive(Debug, Clone, Copy, Default, PartialEq, ZeroCopySend)]
+#[derive(Debug, Clone, Copy, Default, PartialEq, ZeroCopySend, bytemuck::Zeroable)]
 #[repr(C)]
 #[type_name("vpsom::ObjectVisibility")]
 pub struct ObjectVisibility {
@@ -926,7 +1125,7 @@ pub struct ObjectVisibility {
 /// Per rendered frame, the visibility of every ground-truth foreground object in the camera's
 /// view (`sim/visibility`, evaluation only; which objects count is the simulator's
 /// `Sim::visibility`, the metric is `nodes::eval::occlusion`).
-#[derive(Debug, Clone, Copy, ZeroCopySend)]
+#[derive(Debug, Clone, Copy, ZeroCopySend, bytemuck::Zeroable)]
 #[repr(C)]
 #[type_name("vpsom::FrameVisibility")]
 pub struct FrameVisibility {
@@ -949,6 +1148,8 @@ impl FrameVisibility {
     }
 }
 
+/// Rules: `count` ≤ [`MAX_OBJECTS`]; each of the first `count` items: `bbox` finite,
+/// `truncated` 0 or 1.
 impl Validate for FrameVisibility {
     fn validate(&self) -> Result<(), ValidationError> {
         let c = Checker {
@@ -956,50 +1157,12 @@ impl Validate for FrameVisibility {
         };
         c.count("count", self.count as usize, MAX_OBJECTS)?;
         for (k, v) in self.items().iter().enumerate() {
-            if v.bbox.iter().any(|x| !x.is_finite()) {
-                c.finite(Field::item("items", k, "bbox"), &v.bbox)?;
-            }
+            c.finite(Field::item("items", k, "bbox"), &v.bbox)?;
+            c.flag(Field::item("items", k, "truncated"), v.truncated)?;
         }
         Ok(())
     }
 }
-
-// SAFETY (all impls below): each type is `#[repr(C)]` and made only of integers, floats and
-// arrays/structs thereof, for which the all-zero bit pattern is valid.
-macro_rules! zero_valid {
-    ($($t:ty),*) => { $(
-        // SAFETY: see the comment above the macro; `$t` is plain old data.
-        unsafe impl ZeroValid for $t {}
-    )* };
-}
-zero_valid!(
-    Header,
-    Pose3,
-    Intrinsics,
-    DepthFrame,
-    Detection,
-    Detections,
-    RobotState,
-    MapObject,
-    ObjectMap,
-    OccupancyGrid,
-    NavGoal,
-    NeckGoal,
-    DeadlineEvent,
-    Candidate,
-    PlannerDecision,
-    ObjectVisibility,
-    FrameVisibility
-);
-
-// SAFETY: `DepthFrame` is `#[repr(C)]` of a `Header` (three `u64`), `u32`s, `Intrinsics` (six
-// `f32`), `Pose3` (seven `f32`) and a `u16` array; `Detections` of a `Header`, a `u64`, `u32`s,
-// an array of `Detection` (`u16`s, an `f32`, a `u16` array, a `u32`) and a `u8` array. Integers
-// and floats accept every bit pattern (a stale float may be NaN, which is a valid `f32`); there
-// are no `bool`s, enums, pointers or niches.
-unsafe impl AnyBitPattern for DepthFrame {}
-// SAFETY: see `DepthFrame` above.
-unsafe impl AnyBitPattern for Detections {}
 
 #[cfg(test)]
 mod tests {
@@ -1123,7 +1286,7 @@ mod tests {
             label: 1,
             score: 0.9,
             bbox: [1, 1, 5, 5],
-            mask_pixels: 16,
+            mask_pixels: 0,
         };
         assert_eq!(d.validate(), Ok(()));
         d.items[0].bbox = [6, 1, 5, 5];
@@ -1143,6 +1306,7 @@ mod tests {
         let mut m = boxed_zeroed::<ObjectMap>();
         m.eps_sopm = 0.42;
         m.count = 2;
+        m.objects[1].id = 1;
         m.objects[1].sopm_rows = 18;
         m.objects[1].sopm_cols = 18;
         m.objects[1].sopm_prob[..324].fill(0.5);
@@ -1217,7 +1381,7 @@ mod tests {
             yaw: f32::NAN,
             ..Default::default()
         };
-        assert_eq!(n.validate().unwrap_err().field, "neck");
+        assert_eq!(n.validate().unwrap_err().field, "yaw");
 
         let mut e = DeadlineEvent {
             period_ns: 1_000_000,

@@ -19,9 +19,10 @@ pub struct ValidationError {
     pub reason: String,
 }
 
-/// Checks a received payload for NaN/inf and out-of-range counts.
+/// Checks a received payload for NaN/inf, out-of-range counts and the type's documented rules
+/// (listed on each message type's impl).
 pub trait Validate {
-    /// `Ok` if every float is finite and every count is within capacity.
+    /// `Ok` if every float is finite, every count is within capacity and every rule holds.
     fn validate(&self) -> Result<(), ValidationError>;
 }
 
@@ -96,6 +97,46 @@ impl Checker {
             Ok(())
         } else {
             Err(self.err(field, format!("{value} is outside [{lo}, {hi}]")))
+        }
+    }
+
+    /// Every element finite and within `[-limit, limit]`.
+    pub fn within(
+        &self,
+        field: impl Into<Field>,
+        values: &[f32],
+        limit: f32,
+    ) -> Result<(), ValidationError> {
+        match values
+            .iter()
+            .position(|v| !(v.is_finite() && v.abs() <= limit))
+        {
+            None => Ok(()),
+            Some(i) => Err(self.err(
+                field,
+                format!("element {i} is {}, outside [-{limit}, {limit}]", values[i]),
+            )),
+        }
+    }
+
+    /// A 0/1 flag.
+    pub fn flag(&self, field: impl Into<Field>, value: u8) -> Result<(), ValidationError> {
+        if value <= 1 {
+            Ok(())
+        } else {
+            Err(self.err(field, format!("{value} (a flag is 0 or 1)")))
+        }
+    }
+
+    /// A cluster id: -1 (none) or a (non-negative) background object id.
+    pub fn cluster(&self, field: impl Into<Field>, value: i32) -> Result<(), ValidationError> {
+        if value >= -1 {
+            Ok(())
+        } else {
+            Err(self.err(
+                field,
+                format!("{value} (-1 for none, else an object id >= 0)"),
+            ))
         }
     }
 

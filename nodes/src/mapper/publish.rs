@@ -49,7 +49,9 @@ impl Mapper {
             m.class_id = o.class_id;
             m.background = o.background as u8;
             m.center = o.cuboid.center.to_array();
-            m.size = o.cuboid.size.to_array();
+            // Clamped: a flat cuboid's extent can round to -1e-6 (more far from the origin),
+            // and a negative size fails `ObjectMap` validation, which drops the whole map.
+            m.size = o.cuboid.size.max(Vec3::ZERO).to_array();
             m.yaw = o.cuboid.yaw;
             m.point_count = o.point_count;
             m.cluster_id = cluster_id;
