@@ -66,6 +66,9 @@ enum Command {
         /// Extra GBV candidates kept in the pool (see `vpsom run --gbv-load`).
         #[arg(long, default_value_t = 0)]
         gbv_load: usize,
+        /// The recorder serves the live view on this port (see `vpsom run --live`).
+        #[arg(long)]
+        live: Option<u16>,
     },
 }
 
@@ -114,6 +117,10 @@ struct RunCmd {
     /// `shm_types/include/vpsom_topics.h`); the run reports which have no publisher yet.
     #[arg(long, value_delimiter = ',', conflicts_with = "lockstep")]
     nodes: Vec<String>,
+    /// Serve the run's topics live to Foxglove over its WebSocket protocol (the recorder
+    /// publishes; connect Foxglove to ws://HOST:PORT). PORT defaults to `[recorder] live_port`.
+    #[arg(long, value_name = "PORT", num_args = 0..=1, conflicts_with = "lockstep")]
+    live: Option<Option<u16>>,
 }
 
 #[derive(Debug, Args)]
@@ -223,6 +230,7 @@ fn main() -> ExitCode {
         lockstep: false,
         gbv_load: 0,
         nodes: Vec::new(),
+        live: None,
     }));
     let result = match command {
         Command::Run(cmd) => run(config, cmd),
@@ -239,7 +247,15 @@ fn main() -> ExitCode {
             out,
             time_scale,
             gbv_load,
-        } => node(config, &role, session, ns, out, time_scale, gbv_load),
+            live,
+        } => node(
+            config,
+            &role,
+            session,
+            ns,
+            out,
+            (time_scale, gbv_load, live),
+        ),
     };
     match result {
         Ok(code) => code,
@@ -338,6 +354,7 @@ fn run(config: Option<PathBuf>, cmd: RunCmd) -> anyhow::Result<ExitCode> {
             config_file: config,
             gbv_load: cmd.gbv_load,
             nodes,
+            live: cmd.live.map(|p| p.unwrap_or(cfg.recorder.live_port)),
         };
         let exe = std::env::current_exe().context("locating the vpsom executable")?;
         let outcome = deploy::run(&args, &cfg, &exe)?;
@@ -603,8 +620,7 @@ fn node(
     s: SessionArgs,
     ns: String,
     out: PathBuf,
-    time_scale: f64,
-    gbv_load: usize,
+    (time_scale, gbv_load, live): (f64, usize, Option<u16>),
 ) -> anyhow::Result<ExitCode> {
     let cfg = deploy::run_config(&load_config(config.as_deref())?, &s.planner)?;
     let args = deploy::RunArgs {
@@ -617,6 +633,7 @@ fn node(
         config_file: config,
         gbv_load,
         nodes: vec![],
+        live,
     };
     match role {
         "sim" => deploy::sim_node(&args, &cfg)?,

@@ -99,7 +99,7 @@ fn vpsom_terminates_maps_every_object_and_its_trace_reads_back() {
 /// The same trace through an independent reader (Python `mcap`, CRCs on). `.ci/run` runs it with
 /// `--ignored` after making the venv; without `VPSOM_PYTHON` it fails, never skips.
 #[test]
-#[ignore = "needs VPSOM_PYTHON (a python with mcap and jsonschema); run by .ci/run with --ignored"]
+#[ignore = "needs VPSOM_PYTHON (a python with mcap and mcap-protobuf-support); run by .ci/run with --ignored"]
 fn vpsom_trace_reads_back_in_python_mcap() {
     let py = std::env::var("VPSOM_PYTHON")
         .expect("precondition: VPSOM_PYTHON must name a python with the `mcap` package");

@@ -182,6 +182,8 @@ pub struct RecorderConfig {
     pub trajectory_max_poses: usize,
     /// Length of the drawn candidate-view frusta, metres.
     pub frustum_length_m: f64,
+    /// Port of the live view when `vpsom run --live` names none.
+    pub live_port: u16,
     /// Limits of the `view` profile.
     pub view: ViewProfile,
 }
@@ -708,7 +710,7 @@ impl RecorderHandle {
     }
 
     /// Record the navigation grid (`/nav/grid`). Allocates a copy: grids are rare (the sim
-    /// publishes one per run); not for a real-time thread.
+    /// publishes one a second); not for a real-time thread.
     pub fn record_nav_grid(&self, g: &OccupancyGrid) {
         let mut b = boxed_zeroed::<OccupancyGrid>();
         b.header = g.header;
