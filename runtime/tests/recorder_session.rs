@@ -9,7 +9,7 @@ use recorder_common::*;
 use runtime::recorder::inspect::{export_csv, info};
 use runtime::recorder::schemas::topic;
 use runtime::recorder::{
-    Kind, LatencySummary, LogLevel, NodeLatency, Recorder, RecorderConfig, RecorderSetup,
+    Kind, LatencySummary, LogLevel, NodeLatency, Profile, Recorder, RecorderConfig, RecorderSetup,
     RecorderSummary, TruthBox,
 };
 use shm_types::{NavGoal, NeckGoal, decision_kind};
@@ -343,6 +343,55 @@ fn python_mcap_reads_the_overloaded_trace_with_the_same_counts() {
     expect.retain(|_, n| *n > 0);
     assert!(expect.contains_key(topic::DEPTH));
     python_check(&path, &expect);
+    let _ = std::fs::remove_file(&path);
+}
+
+/// The `view` profile: per-topic limits in simulated time, decimated depth, and every message a
+/// limit leaves out counted as throttled (not dropped) in the stats and the metadata.
+#[test]
+fn view_profile_keeps_rate_limits_and_counts_what_it_leaves_out() {
+    let path = tmp("view.mcap");
+    let mut cfg = RecorderConfig {
+        profile: Profile::View,
+        depth_queue_len: 32,
+        ..Default::default()
+    };
+    cfg.view.depth_decimation = 2;
+    cfg.view.max_hz = BTreeMap::from([
+        (topic::DEPTH.to_string(), 2.0),
+        (topic::STATE.to_string(), 0.0),
+    ]);
+    let rec = Recorder::create(&path, &cfg, RecorderSetup::default()).unwrap();
+    let h = rec.handle();
+    // 30 frames and states at t = seq × 33.333333 ms.
+    for i in 1..=30 {
+        h.record_depth(&depth(i, 64, 48));
+        h.record_state(&state(i));
+    }
+    let summary = rec.finish().unwrap();
+    // 2 Hz = at least 500 ms apart: seq 1 (33.3 ms) is kept; seq 16 (533.333328 ms) is 5 ns
+    // short of 533.333333 ms, so seq 17 (566.7 ms) is next; seq 33 would be the third.
+    let (msgs, _) = read_all(&path);
+    let kept: Vec<u64> = msgs
+        .iter()
+        .filter(|m| m.topic == topic::DEPTH)
+        .map(|m| m.log_time / 33_333_333)
+        .collect();
+    assert_eq!(kept, [1, 17]);
+    let img = msgs.iter().find(|m| m.topic == topic::DEPTH).unwrap();
+    assert_eq!((img.value["width"].as_u64(), img.value["height"].as_u64()), (Some(32), Some(24)));
+    let c = counts(&msgs);
+    assert_eq!(c.get(topic::STATE), None, "0 Hz: not recorded");
+    assert_eq!(c[topic::TF], 30, "not listed: not limited");
+    assert_eq!(summary.drops.total_dropped(), 0);
+    assert_eq!(summary.drops.throttled[topic::DEPTH], 28);
+    assert_eq!(summary.drops.throttled[topic::STATE], 30);
+    let inf = info(&path).unwrap();
+    assert_eq!(inf.drops.as_ref().unwrap().throttled, summary.drops.throttled);
+    assert_eq!(inf.metadata["session"]["profile"], "view");
+    let stats = msgs.iter().rev().find(|m| m.topic == topic::STATS).unwrap();
+    assert_eq!(stats.value["throttled_total"], 58);
+    assert_eq!(stats_of(&stats.value, topic::DEPTH)["throttled"], 28);
     let _ = std::fs::remove_file(&path);
 }
 
