@@ -45,6 +45,9 @@ enum Command {
     /// Inspect an MCAP trace.
     #[command(subcommand)]
     Trace(TraceCmd),
+    /// Re-run the mapper and planner on a trace's recorded inputs (open loop: the robot moves
+    /// as recorded).
+    Replay(ReplayCmd),
     /// Print what the runtime can get on this machine (shared memory, scheduling, clocks, CPUs).
     Doctor,
     /// Run one node process of a `vpsom run` (started by the launcher).
@@ -121,6 +124,23 @@ struct RunCmd {
     /// publishes; connect Foxglove to ws://HOST:PORT). PORT defaults to `[recorder] live_port`.
     #[arg(long, value_name = "PORT", num_args = 0..=1, conflicts_with = "lockstep")]
     live: Option<Option<u16>>,
+}
+
+#[derive(Debug, Args)]
+struct ReplayCmd {
+    /// The trace (`out/<run>/trace.mcap`, or the run directory).
+    trace: PathBuf,
+    /// View planner of the replay (default: the config's `[planner] kind`; vpsom | coverage |
+    /// frontier | vpsom-no-<term>).
+    #[arg(long)]
+    planner: Option<String>,
+    /// Compare every map, decision and goal with the recorded one and report the first
+    /// divergence (exit status 1 if there is one).
+    #[arg(long)]
+    check: bool,
+    /// Output directory of the new trace (default: `<trace dir>/replay-<planner>`).
+    #[arg(long, conflicts_with = "check")]
+    out: Option<PathBuf>,
 }
 
 #[derive(Debug, Args)]
@@ -239,6 +259,7 @@ fn main() -> ExitCode {
         Command::Scene(cmd) => scene_cmd(config, cmd),
         Command::Report { dirs, out } => report(&dirs, out),
         Command::Trace(cmd) => trace(cmd),
+        Command::Replay(cmd) => replay_cmd(config, cmd),
         Command::Doctor => doctor(config),
         Command::Node {
             role,
@@ -602,6 +623,57 @@ fn trace(cmd: TraceCmd) -> anyhow::Result<ExitCode> {
             let r = runtime::recorder::recover::recover(&input, &output)?;
             println!("{}: {r}", output.display());
         }
+    }
+    Ok(ExitCode::SUCCESS)
+}
+
+fn replay_cmd(config: Option<PathBuf>, cmd: ReplayCmd) -> anyhow::Result<ExitCode> {
+    use nodes::app::replay;
+    let base = load_config(config.as_deref())?;
+    let label = cmd
+        .planner
+        .clone()
+        .unwrap_or_else(|| base.planner.kind.to_string());
+    let cfg = lockstep::config_for(&base, &label)?;
+    let dir = if cmd.trace.is_dir() {
+        cmd.trace.clone()
+    } else {
+        cmd.trace
+            .parent()
+            .map(Path::to_path_buf)
+            .unwrap_or_default()
+    };
+    let out = (!cmd.check).then(|| {
+        cmd.out
+            .clone()
+            .unwrap_or_else(|| dir.join(format!("replay-{label}")))
+    });
+    let spec = replay::ReplaySpec {
+        trace: cmd.trace.clone(),
+        config: cfg,
+        check: cmd.check,
+        out: out.clone(),
+    };
+    let r = replay::replay(&spec)?;
+    print!("{r}");
+    if cmd.check {
+        return Ok(match &r.divergence {
+            None => {
+                println!("identical: every map, decision and goal reproduced exactly");
+                ExitCode::SUCCESS
+            }
+            Some(d) => {
+                println!("first divergence: {d}");
+                ExitCode::FAILURE
+            }
+        });
+    }
+    if let Some(o) = out {
+        println!(
+            "open loop (the robot moved as recorded): new trace, decisions.csv, map.json and \
+             (with a built-in scene) metrics.json in {}",
+            o.display()
+        );
     }
     Ok(ExitCode::SUCCESS)
 }

@@ -41,8 +41,11 @@ fn recorded_session(tag: &str) -> (lockstep::SessionResult, PathBuf, PathBuf) {
     std::fs::create_dir_all(&dir).unwrap();
     let mcap = dir.join("trace.mcap");
     let mut s = spec("vpsom", Some(mcap.clone()));
-    // Small depth images keep the independent (Python) reader quick.
-    s.config.recorder.depth_decimation = 8;
+    // Small depth images keep the independent (Python) reader quick: the view profile's
+    // decimation, without its rate limits (every message handed over is checked below).
+    s.config.recorder.profile = runtime::recorder::Profile::View;
+    s.config.recorder.view.depth_decimation = 8;
+    s.config.recorder.view.max_hz.clear();
     let r = lockstep::run_session(&s, |_| {}).unwrap();
     (r, dir, mcap)
 }

@@ -129,7 +129,13 @@ fn every_message_is_written_once_and_decodes_with_its_schema() {
     let (msgs, end) = read_all(&path);
     assert!(end.complete && end.truncation.is_none(), "{end:?}");
     // Foxglove's well-known types carry Foxglove's own schema names.
-    let schema = |t: &str| msgs.iter().find(|m| m.topic == t).unwrap().schema_name.clone();
+    let schema = |t: &str| {
+        msgs.iter()
+            .find(|m| m.topic == t)
+            .unwrap()
+            .schema_name
+            .clone()
+    };
     assert_eq!(schema(topic::DEPTH), "foxglove.RawImage");
     assert_eq!(schema(topic::TF), "foxglove.FrameTransforms");
     assert_eq!(schema(topic::MAP), "foxglove.SceneUpdate");
@@ -193,10 +199,7 @@ fn every_message_is_written_once_and_decodes_with_its_schema() {
         .map(|b| u16::from_le_bytes([b[0], b[1]]))
         .collect();
     assert_eq!(px, sent.pixels());
-    let ann = msgs
-        .iter()
-        .find(|m| m.topic == topic::ANNOTATIONS)
-        .unwrap();
+    let ann = msgs.iter().find(|m| m.topic == topic::ANNOTATIONS).unwrap();
     assert_eq!(ann.log_time, header(1).sim_time_ns);
     assert_eq!(ann.value["points"].as_array().unwrap().len(), 2);
     let label = format!("{} 0.50", shm_types::class_name(56));
@@ -241,7 +244,10 @@ fn every_message_is_written_once_and_decodes_with_its_schema() {
     let mut csv = Vec::new();
     export_csv(&path, topic::STATS, &mut csv).unwrap();
     let csv = String::from_utf8(csv).unwrap();
-    assert!(csv.lines().next().unwrap().contains("dropped_total"), "{csv}");
+    assert!(
+        csv.lines().next().unwrap().contains("dropped_total"),
+        "{csv}"
+    );
     assert!(csv.contains("/camera/depth"), "{csv}");
     let e = export_csv(&path, "/nope", &mut Vec::new()).unwrap_err();
     assert!(e.to_string().contains("no topic /nope"), "{e}");
@@ -379,7 +385,10 @@ fn view_profile_keeps_rate_limits_and_counts_what_it_leaves_out() {
         .collect();
     assert_eq!(kept, [1, 17]);
     let img = msgs.iter().find(|m| m.topic == topic::DEPTH).unwrap();
-    assert_eq!((img.value["width"].as_u64(), img.value["height"].as_u64()), (Some(32), Some(24)));
+    assert_eq!(
+        (img.value["width"].as_u64(), img.value["height"].as_u64()),
+        (Some(32), Some(24))
+    );
     let c = counts(&msgs);
     assert_eq!(c.get(topic::STATE), None, "0 Hz: not recorded");
     assert_eq!(c[topic::TF], 30, "not listed: not limited");
@@ -387,7 +396,10 @@ fn view_profile_keeps_rate_limits_and_counts_what_it_leaves_out() {
     assert_eq!(summary.drops.throttled[topic::DEPTH], 28);
     assert_eq!(summary.drops.throttled[topic::STATE], 30);
     let inf = info(&path).unwrap();
-    assert_eq!(inf.drops.as_ref().unwrap().throttled, summary.drops.throttled);
+    assert_eq!(
+        inf.drops.as_ref().unwrap().throttled,
+        summary.drops.throttled
+    );
     assert_eq!(inf.metadata["session"]["profile"], "view");
     let stats = msgs.iter().rev().find(|m| m.topic == topic::STATS).unwrap();
     assert_eq!(stats.value["throttled_total"], 58);
@@ -420,6 +432,11 @@ fn foxglove_layout_names_recorded_topics() {
     assert!(cfg.keys().any(|k| k.starts_with("3D!")));
     let img = cfg.iter().find(|(k, _)| k.starts_with("Image!")).unwrap().1;
     assert_eq!(img["imageMode"]["imageTopic"], topic::DEPTH);
+    assert_eq!(img["imageMode"]["calibrationTopic"], topic::CALIBRATION);
+    assert_eq!(
+        img["imageMode"]["annotations"][topic::ANNOTATIONS]["visible"],
+        true
+    );
     let plot = cfg.iter().find(|(k, _)| k.starts_with("Plot!")).unwrap().1;
     let path = plot["paths"][0]["value"].as_str().unwrap();
     assert!(

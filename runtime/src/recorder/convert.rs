@@ -13,15 +13,14 @@ use foxglove::messages::{
 };
 use glam::{DMat3, DQuat, DVec3};
 use shm_types::{
-    DeadlineEvent, DepthFrame, Detections, MapObject, NavGoal, NeckGoal, ObjectMap,
-    OccupancyGrid, PlannerDecision, RobotState, class_name, decision_kind, goal_kind, miss_cause,
-    planner_state,
+    DeadlineEvent, DepthFrame, Detections, MapObject, NavGoal, NeckGoal, ObjectMap, OccupancyGrid,
+    PlannerDecision, RobotState, class_name, decision_kind, goal_kind, miss_cause, planner_state,
 };
 
 // ---- producer-side copies (no allocation) --------------------------------------------------
 
 /// Copy the used part of `src` into `dst`.
-pub(super) fn copy_depth(src: &DepthFrame, dst: &mut DepthFrame) {
+pub fn copy_depth(src: &DepthFrame, dst: &mut DepthFrame) {
     dst.header = src.header;
     dst.width = src.width.min(shm_types::MAX_WIDTH as u32);
     dst.height = src.height.min(shm_types::MAX_HEIGHT as u32);
@@ -32,7 +31,7 @@ pub(super) fn copy_depth(src: &DepthFrame, dst: &mut DepthFrame) {
 }
 
 /// Copy the used part of `src` into `dst` (the label mask only when it has one).
-pub(super) fn copy_detections(src: &Detections, dst: &mut Detections) {
+pub fn copy_detections(src: &Detections, dst: &mut Detections) {
     dst.header = src.header;
     dst.frame_seq = src.frame_seq;
     dst.width = src.width.min(shm_types::MAX_WIDTH as u32);
@@ -48,7 +47,7 @@ pub(super) fn copy_detections(src: &Detections, dst: &mut Detections) {
 }
 
 /// Copy the used part of `src` into `dst`.
-pub(super) fn copy_decision(src: &PlannerDecision, dst: &mut PlannerDecision) {
+pub fn copy_decision(src: &PlannerDecision, dst: &mut PlannerDecision) {
     dst.header = src.header;
     dst.map_seq = src.map_seq;
     dst.eval_ns = src.eval_ns;
@@ -64,7 +63,7 @@ pub(super) fn copy_decision(src: &PlannerDecision, dst: &mut PlannerDecision) {
 // ---- small helpers --------------------------------------------------------------------------
 
 /// A Foxglove timestamp of `ns` nanoseconds.
-pub(super) fn time(ns: u64) -> Timestamp {
+pub fn time(ns: u64) -> Timestamp {
     Timestamp::new((ns / 1_000_000_000) as u32, (ns % 1_000_000_000) as u32)
 }
 
@@ -106,7 +105,7 @@ fn f3(a: [f32; 3]) -> DVec3 {
 
 /// Axes `(right, down, forward)` of an optical camera whose forward axis has yaw `yaw` and is
 /// pitched down by `pitch` (same convention as `nodes::geom::optical_rotation`).
-pub(super) fn optical_axes(yaw: f64, pitch: f64) -> (DVec3, DVec3, DVec3) {
+pub fn optical_axes(yaw: f64, pitch: f64) -> (DVec3, DVec3, DVec3) {
     let (sy, cy) = yaw.sin_cos();
     let (sp, cp) = pitch.sin_cos();
     let forward = DVec3::new(cy * cp, sy * cp, -sp);
@@ -119,7 +118,7 @@ fn rgba(r: f64, g: f64, b: f64, a: f64) -> Color {
 }
 
 /// A stable, well-spread colour per class id (hue steps of the golden ratio).
-pub(super) fn class_color(class_id: u16, a: f64) -> Color {
+pub fn class_color(class_id: u16, a: f64) -> Color {
     let h6 = (f64::from(class_id) * 0.618_033_988_75).rem_euclid(1.0) * 6.0;
     let (s, v) = (0.75, 0.95);
     let c = v * s;
@@ -137,7 +136,7 @@ pub(super) fn class_color(class_id: u16, a: f64) -> Color {
 }
 
 /// Red (t = 0) to green (t = 1).
-pub(super) fn score_color(t: f64, a: f64) -> Color {
+pub fn score_color(t: f64, a: f64) -> Color {
     let t = t.clamp(0.0, 1.0);
     rgba(1.0 - t, t, 0.15, a)
 }
@@ -174,7 +173,7 @@ fn entity(t: Timestamp, id: String) -> SceneEntity {
 // ---- Foxglove well-known messages -----------------------------------------------------------
 
 /// `RawImage` (`16UC1`, little-endian mm) of `f` decimated by `k` in x and y.
-pub(super) fn depth_image(f: &DepthFrame, k: u32) -> RawImage {
+pub fn depth_image(f: &DepthFrame, k: u32) -> RawImage {
     let (w, h) = (f.width as usize, f.height as usize);
     let k = k.max(1) as usize;
     let (dw, dh) = (w.div_ceil(k), h.div_ceil(k));
@@ -196,7 +195,7 @@ pub(super) fn depth_image(f: &DepthFrame, k: u32) -> RawImage {
 }
 
 /// `CameraCalibration` of the image [`depth_image`] makes of `f` (intrinsics scaled by `1/k`).
-pub(super) fn calibration(f: &DepthFrame, k: u32) -> CameraCalibration {
+pub fn calibration(f: &DepthFrame, k: u32) -> CameraCalibration {
     let i = &f.intrinsics;
     let s = 1.0 / f64::from(k.max(1));
     let (fx, fy) = (f64::from(i.fx) * s, f64::from(i.fy) * s);
@@ -216,7 +215,7 @@ pub(super) fn calibration(f: &DepthFrame, k: u32) -> CameraCalibration {
 
 /// `ImageAnnotations` of the detections' boxes with class and score labels, on the depth
 /// image's frame and timestamp (`time_ns`), in the image decimated by `k`.
-pub(super) fn annotations(d: &Detections, time_ns: u64, k: u32) -> ImageAnnotations {
+pub fn annotations(d: &Detections, time_ns: u64, k: u32) -> ImageAnnotations {
     let t = time(time_ns);
     let s = 1.0 / f64::from(k.max(1));
     let mut a = ImageAnnotations {
@@ -249,7 +248,7 @@ pub(super) fn annotations(d: &Detections, time_ns: u64, k: u32) -> ImageAnnotati
 }
 
 /// `FrameTransforms` world→base→neck→camera (or world→`base_true` alone for truth).
-pub(super) fn transforms(s: &RobotState, mount: &MountGeometry, truth: bool) -> FrameTransforms {
+pub fn transforms(s: &RobotState, mount: &MountGeometry, truth: bool) -> FrameTransforms {
     let t = Some(time(s.header.sim_time_ns));
     let [x, y, yaw] = s.base_pose.map(f64::from);
     let tf = |parent: &str, child: &str, p: DVec3, q: DQuat| FrameTransform {
@@ -285,7 +284,7 @@ pub(super) fn transforms(s: &RobotState, mount: &MountGeometry, truth: bool) -> 
 }
 
 /// `PosesInFrame` of base poses `[x, y, yaw]` in `world`.
-pub(super) fn trajectory(time_ns: u64, poses: &[[f32; 3]]) -> PosesInFrame {
+pub fn trajectory(time_ns: u64, poses: &[[f32; 3]]) -> PosesInFrame {
     PosesInFrame {
         timestamp: Some(time(time_ns)),
         frame_id: "world".into(),
@@ -330,7 +329,7 @@ fn cuboid_entity(
 }
 
 /// `SceneUpdate` of the ground-truth cuboids.
-pub(super) fn truth_objects(boxes: &[TruthBox]) -> SceneUpdate {
+pub fn truth_objects(boxes: &[TruthBox]) -> SceneUpdate {
     let t = time(0);
     let entities = boxes
         .iter()
@@ -377,14 +376,14 @@ fn map_entity(t: Timestamp, o: &MapObject) -> SceneEntity {
 }
 
 /// `SceneUpdate` of the estimated cuboids (replaces the previous map).
-pub(super) fn map_objects(m: &ObjectMap) -> SceneUpdate {
+pub fn map_objects(m: &ObjectMap) -> SceneUpdate {
     let t = time(m.header.sim_time_ns);
     replace_all(t, m.objects().iter().map(|o| map_entity(t, o)).collect())
 }
 
 /// `SceneUpdate` of the candidate frusta of a decision, coloured by F(v) (red = lowest,
 /// green = highest of the decision); the chosen view is drawn thick and blue.
-pub(super) fn frusta(d: &PlannerDecision, mount: &MountGeometry, length: f64) -> SceneUpdate {
+pub fn frusta(d: &PlannerDecision, mount: &MountGeometry, length: f64) -> SceneUpdate {
     let t = time(d.header.sim_time_ns);
     let cands = d.candidates();
     let (lo, hi) = cands
@@ -437,10 +436,8 @@ pub(super) fn frusta(d: &PlannerDecision, mount: &MountGeometry, length: f64) ->
                 color: Some(color),
                 ..Default::default()
             });
-            e.metadata.extend([
-                kv("value", format!("{:.4}", c.value)),
-                kv("chosen", chosen),
-            ]);
+            e.metadata
+                .extend([kv("value", format!("{:.4}", c.value)), kv("chosen", chosen)]);
             e
         })
         .collect();
@@ -448,7 +445,7 @@ pub(super) fn frusta(d: &PlannerDecision, mount: &MountGeometry, length: f64) ->
 }
 
 /// `Log`.
-pub(super) fn log(time_ns: u64, level: LogLevel, name: &str, text: &str) -> Log {
+pub fn log(time_ns: u64, level: LogLevel, name: &str, text: &str) -> Log {
     Log {
         timestamp: Some(time(time_ns)),
         level: level as i32,
@@ -462,7 +459,7 @@ pub(super) fn log(time_ns: u64, level: LogLevel, name: &str, text: &str) -> Log 
 // ---- our own messages -----------------------------------------------------------------------
 
 /// [`own::PlannerDecision`] with every candidate and F(v) term.
-pub(super) fn decision(d: &PlannerDecision) -> own::PlannerDecision {
+pub fn decision(d: &PlannerDecision) -> own::PlannerDecision {
     let cands = d.candidates();
     own::PlannerDecision {
         seq: d.header.seq,
@@ -511,8 +508,23 @@ pub(super) fn decision(d: &PlannerDecision) -> own::PlannerDecision {
     }
 }
 
+/// [`own::MapMeta`].
+pub fn map_meta(m: &ObjectMap) -> own::MapMeta {
+    own::MapMeta {
+        seq: m.header.seq,
+        stamp_ns: m.header.stamp_ns,
+        sim_time_ns: m.header.sim_time_ns,
+        last_frame_seq: m.last_frame_seq,
+        last_frame_stamp_ns: m.last_frame_stamp_ns,
+        count: m.count,
+        frames_integrated: m.frames_integrated,
+        frames_rejected: m.frames_rejected,
+        frames_unmatched: m.frames_unmatched,
+    }
+}
+
 /// [`own::NavGoal`].
-pub(super) fn nav_goal(g: &NavGoal) -> own::NavGoal {
+pub fn nav_goal(g: &NavGoal) -> own::NavGoal {
     own::NavGoal {
         seq: g.header.seq,
         stamp_ns: g.header.stamp_ns,
@@ -533,7 +545,7 @@ pub(super) fn nav_goal(g: &NavGoal) -> own::NavGoal {
 }
 
 /// [`own::NeckGoal`].
-pub(super) fn neck_goal(g: &NeckGoal) -> own::NeckGoal {
+pub fn neck_goal(g: &NeckGoal) -> own::NeckGoal {
     own::NeckGoal {
         seq: g.header.seq,
         stamp_ns: g.header.stamp_ns,
@@ -547,7 +559,7 @@ pub(super) fn neck_goal(g: &NeckGoal) -> own::NeckGoal {
 }
 
 /// [`own::DeadlineEvent`].
-pub(super) fn deadline(e: &DeadlineEvent) -> own::DeadlineEvent {
+pub fn deadline(e: &DeadlineEvent) -> own::DeadlineEvent {
     own::DeadlineEvent {
         seq: e.header.seq,
         stamp_ns: e.header.stamp_ns,
@@ -569,7 +581,7 @@ pub(super) fn deadline(e: &DeadlineEvent) -> own::DeadlineEvent {
 }
 
 /// [`own::LatencySummary`].
-pub(super) fn latency(s: &LatencySummary) -> own::LatencySummary {
+pub fn latency(s: &LatencySummary) -> own::LatencySummary {
     own::LatencySummary {
         time_ns: s.time_ns,
         period_ns: s.period_ns,
@@ -591,7 +603,7 @@ pub(super) fn latency(s: &LatencySummary) -> own::LatencySummary {
 }
 
 /// [`own::Metrics`]: every numeric leaf of `v` by dotted path, and `v` as text.
-pub(super) fn metrics(v: &serde_json::Value) -> own::Metrics {
+pub fn metrics(v: &serde_json::Value) -> own::Metrics {
     fn walk(prefix: &str, v: &serde_json::Value, out: &mut Vec<own::MetricValue>) {
         let key = |k: &str| {
             if prefix.is_empty() {
@@ -626,7 +638,7 @@ pub(super) fn metrics(v: &serde_json::Value) -> own::Metrics {
 }
 
 /// [`own::RobotStateRaw`].
-pub(super) fn state_raw(s: &RobotState) -> own::RobotStateRaw {
+pub fn state_raw(s: &RobotState) -> own::RobotStateRaw {
     own::RobotStateRaw {
         seq: s.header.seq,
         stamp_ns: s.header.stamp_ns,
@@ -645,7 +657,7 @@ pub(super) fn state_raw(s: &RobotState) -> own::RobotStateRaw {
 }
 
 /// [`own::DetectionsRaw`].
-pub(super) fn detections_raw(d: &Detections) -> own::DetectionsRaw {
+pub fn detections_raw(d: &Detections) -> own::DetectionsRaw {
     let labels = if d.masks != 0 {
         let n = (d.width * d.height) as usize;
         Bytes::copy_from_slice(&d.labels[..n.min(d.labels.len())])
@@ -676,7 +688,7 @@ pub(super) fn detections_raw(d: &Detections) -> own::DetectionsRaw {
 }
 
 /// [`own::DepthMeta`] of `f` whose pixels are written decimated by `k`.
-pub(super) fn depth_meta(f: &DepthFrame, k: u32) -> own::DepthMeta {
+pub fn depth_meta(f: &DepthFrame, k: u32) -> own::DepthMeta {
     let i = &f.intrinsics;
     let p = &f.camera_pose;
     own::DepthMeta {
@@ -692,7 +704,7 @@ pub(super) fn depth_meta(f: &DepthFrame, k: u32) -> own::DepthMeta {
 }
 
 /// [`own::OccupancyGridRaw`].
-pub(super) fn grid_raw(g: &OccupancyGrid) -> own::OccupancyGridRaw {
+pub fn grid_raw(g: &OccupancyGrid) -> own::OccupancyGridRaw {
     let n = (g.width as usize * g.height as usize).min(g.cells.len());
     own::OccupancyGridRaw {
         seq: g.header.seq,
@@ -815,6 +827,9 @@ mod tests {
         let m = metrics(&v);
         let got: Vec<(&str, f64)> = m.values.iter().map(|x| (x.key.as_str(), x.value)).collect();
         assert_eq!(got, [("a", 1.5), ("b.c", 2.0), ("b.d", 1.0), ("l.0", 3.0)]);
-        assert_eq!(serde_json::from_str::<serde_json::Value>(&m.json).unwrap(), v);
+        assert_eq!(
+            serde_json::from_str::<serde_json::Value>(&m.json).unwrap(),
+            v
+        );
     }
 }

@@ -69,7 +69,9 @@ impl LiveView {
 
     /// Viewers connected now.
     pub fn clients(&self) -> usize {
-        self.server.as_ref().map_or(0, WebSocketServerHandle::client_count)
+        self.server
+            .as_ref()
+            .map_or(0, WebSocketServerHandle::client_count)
     }
 
     /// Publish one encoded message of channel `index` (the order of the file's channels).

@@ -74,6 +74,29 @@ pub struct PlannerDecision {
     pub candidates: Vec<Candidate>,
 }
 
+/// What an object map consumed (`/map/meta`): which frames, how many, when.
+#[derive(Debug, Clone, Default, PartialEq, Encode, Serialize, Deserialize)]
+pub struct MapMeta {
+    /// Header seq of the map.
+    pub seq: u64,
+    /// Monotonic stamp, ns.
+    pub stamp_ns: u64,
+    /// Simulated/robot time, ns.
+    pub sim_time_ns: u64,
+    /// Sequence number of the newest depth frame integrated.
+    pub last_frame_seq: u64,
+    /// Stamp of that frame, ns.
+    pub last_frame_stamp_ns: u64,
+    /// Objects in the map.
+    pub count: u32,
+    /// Frames integrated so far.
+    pub frames_integrated: u32,
+    /// Frames rejected so far (failed validation).
+    pub frames_rejected: u32,
+    /// Frames with no matching detections so far.
+    pub frames_unmatched: u32,
+}
+
 /// A navigation goal (`/planner/nav_goal`).
 #[derive(Debug, Clone, Default, PartialEq, Encode, Serialize, Deserialize)]
 pub struct NavGoal {

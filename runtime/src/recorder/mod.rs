@@ -75,6 +75,7 @@
 //! | `/truth/tf`, `/truth/trajectory` | same, frame `base_true` | [`RecorderHandle::record_true_state`] |
 //! | `/truth/objects` | `foxglove.SceneUpdate` | [`RecorderSetup::truth`] |
 //! | `/map/objects` | `foxglove.SceneUpdate` | [`RecorderHandle::record_map`] |
+//! | `/map/meta` | [`messages::MapMeta`] (the frames each map consumed) | same |
 //! | `/planner/gbv`, `/planner/lbv` | `foxglove.SceneUpdate` frusta | [`RecorderHandle::record_decision`] |
 //! | `/planner/decisions` | [`messages::PlannerDecision`] (every F(v) term) | same |
 //! | `/planner/nav_goal`, `/planner/neck_goal` | [`messages::NavGoal`], [`messages::NeckGoal`] | `record_*_goal` |
@@ -89,7 +90,7 @@
 //! `config/foxglove-layout.json` is a Foxglove layout for these topics (3D, depth with the
 //! detection boxes, LBV exec time).
 
-mod convert;
+pub mod convert;
 pub mod decode;
 pub mod inspect;
 pub mod live;
@@ -97,6 +98,9 @@ pub mod messages;
 pub mod recover;
 pub mod schemas;
 mod writer;
+
+/// The `foxglove` crate the recorder writes with (its messages decode a trace's Foxglove channels).
+pub use foxglove;
 
 use crate::config::{Checker, ConfigError};
 use crossbeam::channel::{Receiver, Sender, TrySendError};

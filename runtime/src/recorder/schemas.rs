@@ -34,6 +34,8 @@ pub mod topic {
     pub const TRUTH_OBJECTS: &str = "/truth/objects";
     /// Estimated cuboids.
     pub const MAP: &str = "/map/objects";
+    /// What each map consumed (frames, counts).
+    pub const MAP_META: &str = "/map/meta";
     /// GBV candidate frusta and chosen view.
     pub const GBV: &str = "/planner/gbv";
     /// LBV candidate frusta and chosen view.
@@ -98,6 +100,7 @@ pub fn channels() -> Vec<ChannelDef> {
         def::<fg::PosesInFrame>(TRUTH_TRAJECTORY),
         def::<fg::SceneUpdate>(TRUTH_OBJECTS),
         def::<fg::SceneUpdate>(MAP),
+        def::<own::MapMeta>(MAP_META),
         def::<fg::SceneUpdate>(GBV),
         def::<fg::SceneUpdate>(LBV),
         def::<own::PlannerDecision>(DECISIONS),

@@ -334,9 +334,10 @@ impl WriterState {
                 self.keep_for_live(topic::NAV_GRID, t);
             }
             Msg::Map(b) => {
-                let r = self.emit(topic::MAP, b.header.sim_time_ns, b.header.stamp_ns, || {
-                    convert::map_objects(&b)
-                });
+                let (t, p) = (b.header.sim_time_ns, b.header.stamp_ns);
+                let r = self
+                    .emit(topic::MAP, t, p, || convert::map_objects(&b))
+                    .and_then(|()| self.emit(topic::MAP_META, t, p, || convert::map_meta(&b)));
                 shared.map_pool.give(b);
                 r?;
             }
@@ -367,7 +368,9 @@ impl WriterState {
                 self.emit(topic::DEADLINE, t, p, || convert::deadline(&e))?;
             }
             Msg::Latency(s) => {
-                self.emit(topic::LATENCY, s.time_ns, s.time_ns, || convert::latency(&s))?;
+                self.emit(topic::LATENCY, s.time_ns, s.time_ns, || {
+                    convert::latency(&s)
+                })?;
             }
             Msg::Log {
                 time_ns,
@@ -380,7 +383,9 @@ impl WriterState {
                 })?;
             }
             Msg::Metrics { time_ns, value } => {
-                self.emit(topic::METRICS, time_ns, time_ns, || convert::metrics(&value))?;
+                self.emit(topic::METRICS, time_ns, time_ns, || {
+                    convert::metrics(&value)
+                })?;
             }
         }
         Ok(())

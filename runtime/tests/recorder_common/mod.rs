@@ -182,9 +182,7 @@ pub fn read_all(path: &Path) -> (Vec<ReadMessage>, ScanEnd) {
             data,
         } => {
             let (topic, n, t) = chans.get(&channel).expect("channel before message");
-            let value = t
-                .to_json(data)
-                .unwrap_or_else(|e| panic!("{topic}: {e}"));
+            let value = t.to_json(data).unwrap_or_else(|e| panic!("{topic}: {e}"));
             out.push(ReadMessage {
                 topic: topic.clone(),
                 schema_name: n.clone(),
