@@ -213,7 +213,7 @@ enum TraceCmd {
         /// MCAP file, or a run directory.
         file: PathBuf,
     },
-    /// Export a JSON channel as CSV (one column per field, plus log_time_ns); all segments of a
+    /// Export any channel as CSV, decoded through its schema (one column per field, plus log_time_ns); all segments of a
     /// run as for `info`.
     Export {
         /// MCAP file, or a run directory.

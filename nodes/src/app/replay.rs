@@ -515,9 +515,10 @@ impl Sink<'_> {
         }
     }
 
-    fn map(&mut self, m: &ObjectMap, t: u64) {
+    fn map(&mut self, m: &ObjectMap) {
         let i = self.count(topic::MAP);
         let want = self.recorded.maps.pop_front();
+        let t = m.header.sim_time_ns;
         self.compare(topic::MAP, i, t, convert::map_objects(m), want);
         let want = self.recorded.map_meta.pop_front();
         let mut meta = convert::map_meta(m);
@@ -532,27 +533,30 @@ impl Sink<'_> {
         }
     }
 
-    fn decision(&mut self, d: &PlannerDecision, t: u64) {
+    fn decision(&mut self, d: &PlannerDecision) {
         let i = self.count(topic::DECISIONS);
         let want = self.recorded.decisions.pop_front();
+        let t = d.header.sim_time_ns;
         self.compare(topic::DECISIONS, i, t, convert::decision(d), want);
         if let Some(r) = &self.rec {
             r.record_decision(d);
         }
     }
 
-    fn neck(&mut self, g: &NeckGoal, t: u64) {
+    fn neck(&mut self, g: &NeckGoal) {
         let i = self.count(topic::NECK_GOAL);
         let want = self.recorded.neck.pop_front();
+        let t = g.header.sim_time_ns;
         self.compare(topic::NECK_GOAL, i, t, convert::neck_goal(g), want);
         if let Some(r) = &self.rec {
             r.record_neck_goal(g);
         }
     }
 
-    fn nav(&mut self, g: &NavGoal, t: u64) {
+    fn nav(&mut self, g: &NavGoal) {
         let i = self.count(topic::NAV_GOAL);
         let want = self.recorded.nav.pop_front();
+        let t = g.header.sim_time_ns;
         self.compare(topic::NAV_GOAL, i, t, convert::nav_goal(g), want);
         if let Some(r) = &self.rec {
             r.record_nav_goal(g);
@@ -687,15 +691,15 @@ pub fn replay(spec: &ReplaySpec) -> Result<ReplayReport, ReplayError> {
         if t >= next_map {
             mapper.write_map(&mut map, t);
             mapper.write_grid(&mut explore);
-            sink.map(&map, t);
+            sink.map(&map);
             next_map += map_p;
         }
         if t >= next_lbv {
             let neck = planner.neck_goal(&map, &state, t);
             if planner.lbv_decision(&mut lbv_trace) {
-                sink.decision(&lbv_trace, t);
+                sink.decision(&lbv_trace);
             }
-            sink.neck(&neck, t);
+            sink.neck(&neck);
             next_lbv += lbv_p;
         }
         let inputs = PlannerInputs {
@@ -710,9 +714,9 @@ pub fn replay(spec: &ReplaySpec) -> Result<ReplayReport, ReplayError> {
                 Step::Wait => break,
                 Step::Goal(goal) => {
                     if let Some(d) = planner.take_decision() {
-                        sink.decision(&d, t);
+                        sink.decision(&d);
                     }
-                    sink.nav(&goal, t);
+                    sink.nav(&goal);
                     break;
                 }
                 Step::Compute(job) => planner.job_done(job.run(), t),

@@ -424,8 +424,8 @@ impl fmt::Display for TraceInfo {
         }
         writeln!(
             f,
-            "{:<22} {:>9} {:>10} {:>10} {:>8}  schema",
-            "topic", "messages", "first s", "last s", "dropped"
+            "{:<22} {:>9} {:>10} {:>10} {:>8} {:>9}  schema",
+            "topic", "messages", "first s", "last s", "dropped", "throttled"
         )?;
         for t in &self.topics {
             let dropped = self
@@ -433,19 +433,30 @@ impl fmt::Display for TraceInfo {
                 .as_ref()
                 .and_then(|d| d.dropped.get(&t.topic))
                 .map_or("-".to_string(), u64::to_string);
+            let throttled = self
+                .drops
+                .as_ref()
+                .and_then(|d| d.throttled.get(&t.topic))
+                .map_or("-".to_string(), u64::to_string);
             writeln!(
                 f,
-                "{:<22} {:>9} {:>10} {:>10} {:>8}  {}",
+                "{:<22} {:>9} {:>10} {:>10} {:>8} {:>9}  {}",
                 t.topic,
                 t.messages,
                 secs(t.first_ns),
                 secs(t.last_ns),
                 dropped,
+                throttled,
                 t.schema
             )?;
         }
         match &self.drops {
-            Some(d) => write!(f, "dropped total: {}", d.total_dropped()),
+            Some(d) => write!(
+                f,
+                "dropped total: {}, throttled total: {}",
+                d.total_dropped(),
+                d.total_throttled()
+            ),
             None => write!(f, "dropped total: unknown (no recorder stats in file)"),
         }
     }
