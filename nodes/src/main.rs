@@ -634,7 +634,8 @@ fn replay_cmd(config: Option<PathBuf>, cmd: ReplayCmd) -> anyhow::Result<ExitCod
         .planner
         .clone()
         .unwrap_or_else(|| base.planner.kind.to_string());
-    let cfg = lockstep::config_for(&base, &label)?;
+    // The configuration `vpsom run` (lockstep or not) ran with: `[run]`'s camera size.
+    let cfg = deploy::run_config(&base, &label)?;
     let dir = if cmd.trace.is_dir() {
         cmd.trace.clone()
     } else {

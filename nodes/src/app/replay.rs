@@ -356,7 +356,7 @@ fn state_of(s: &rec::RobotStateRaw) -> Result<RobotState, String> {
     let arr = |v: &[f32], n: usize, what: &str| {
         (v.len() == n)
             .then_some(())
-            .ok_or(format!("{what} has {} values, not {n}", v.len()))
+            .ok_or_else(|| format!("{what} has {} values, not {n}", v.len()))
     };
     arr(&s.base_pose, 3, "base_pose")?;
     arr(&s.odom_cov, 9, "odom_cov")?;
@@ -679,6 +679,16 @@ pub fn replay(spec: &ReplaySpec) -> Result<ReplayReport, ReplayError> {
                     Err(_) => return Err(trace_err(path, format!("no depth frame at {t} ns"))),
                 }
             };
+            if (m.width, m.height) != (cfg.camera.width, cfg.camera.height) {
+                return Err(trace_err(
+                    path,
+                    format!(
+                        "depth frames are {}x{}, the config's camera is {}x{} (give the config \
+                         the trace was recorded with)",
+                        m.width, m.height, cfg.camera.width, cfg.camera.height
+                    ),
+                ));
+            }
             frame_of(m, &img, &mut frame).map_err(|e| trace_err(path, e))?;
             let d = inp
                 .detections
