@@ -446,7 +446,8 @@ impl Kind {
         Kind::Metrics,
     ];
 
-    /// The topic that carries exactly one message per accepted input of this kind.
+    /// The topic that carries exactly one message per accepted input of this kind (in the
+    /// `replay` profile; the `view` profile's rate limits leave some out, counted as throttled).
     pub fn topic(self) -> &'static str {
         use schemas::topic;
         match self {
