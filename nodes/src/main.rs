@@ -45,6 +45,9 @@ enum Command {
     /// Inspect an MCAP trace.
     #[command(subcommand)]
     Trace(TraceCmd),
+    /// Re-run the mapper and planner on a trace's recorded inputs (open loop: the robot moves
+    /// as recorded).
+    Replay(ReplayCmd),
     /// Print what the runtime can get on this machine (shared memory, scheduling, clocks, CPUs).
     Doctor,
     /// Run one node process of a `vpsom run` (started by the launcher).
@@ -66,6 +69,9 @@ enum Command {
         /// Extra GBV candidates kept in the pool (see `vpsom run --gbv-load`).
         #[arg(long, default_value_t = 0)]
         gbv_load: usize,
+        /// The recorder serves the live view on this port (see `vpsom run --live`).
+        #[arg(long)]
+        live: Option<u16>,
     },
 }
 
@@ -114,6 +120,27 @@ struct RunCmd {
     /// `shm_types/include/vpsom_topics.h`); the run reports which have no publisher yet.
     #[arg(long, value_delimiter = ',', conflicts_with = "lockstep")]
     nodes: Vec<String>,
+    /// Serve the run's topics live to Foxglove over its WebSocket protocol (the recorder
+    /// publishes; connect Foxglove to ws://HOST:PORT). PORT defaults to `[recorder] live_port`.
+    #[arg(long, value_name = "PORT", num_args = 0..=1, conflicts_with = "lockstep")]
+    live: Option<Option<u16>>,
+}
+
+#[derive(Debug, Args)]
+struct ReplayCmd {
+    /// The trace (`out/<run>/trace.mcap`, or the run directory).
+    trace: PathBuf,
+    /// View planner of the replay (default: the config's `[planner] kind`; vpsom | coverage |
+    /// frontier | vpsom-no-<term>).
+    #[arg(long)]
+    planner: Option<String>,
+    /// Compare every map, decision and goal with the recorded one and report the first
+    /// divergence (exit status 1 if there is one).
+    #[arg(long)]
+    check: bool,
+    /// Output directory of the new trace (default: `<trace dir>/replay-<planner>`).
+    #[arg(long, conflicts_with = "check")]
+    out: Option<PathBuf>,
 }
 
 #[derive(Debug, Args)]
@@ -186,7 +213,7 @@ enum TraceCmd {
         /// MCAP file, or a run directory.
         file: PathBuf,
     },
-    /// Export a JSON channel as CSV (one column per field, plus log_time_ns); all segments of a
+    /// Export any channel as CSV, decoded through its schema (one column per field, plus log_time_ns); all segments of a
     /// run as for `info`.
     Export {
         /// MCAP file, or a run directory.
@@ -223,6 +250,7 @@ fn main() -> ExitCode {
         lockstep: false,
         gbv_load: 0,
         nodes: Vec::new(),
+        live: None,
     }));
     let result = match command {
         Command::Run(cmd) => run(config, cmd),
@@ -231,6 +259,7 @@ fn main() -> ExitCode {
         Command::Scene(cmd) => scene_cmd(config, cmd),
         Command::Report { dirs, out } => report(&dirs, out),
         Command::Trace(cmd) => trace(cmd),
+        Command::Replay(cmd) => replay_cmd(config, cmd),
         Command::Doctor => doctor(config),
         Command::Node {
             role,
@@ -239,7 +268,15 @@ fn main() -> ExitCode {
             out,
             time_scale,
             gbv_load,
-        } => node(config, &role, session, ns, out, time_scale, gbv_load),
+            live,
+        } => node(
+            config,
+            &role,
+            session,
+            ns,
+            out,
+            (time_scale, gbv_load, live),
+        ),
     };
     match result {
         Ok(code) => code,
@@ -338,6 +375,7 @@ fn run(config: Option<PathBuf>, cmd: RunCmd) -> anyhow::Result<ExitCode> {
             config_file: config,
             gbv_load: cmd.gbv_load,
             nodes,
+            live: cmd.live.map(|p| p.unwrap_or(cfg.recorder.live_port)),
         };
         let exe = std::env::current_exe().context("locating the vpsom executable")?;
         let outcome = deploy::run(&args, &cfg, &exe)?;
@@ -589,6 +627,58 @@ fn trace(cmd: TraceCmd) -> anyhow::Result<ExitCode> {
     Ok(ExitCode::SUCCESS)
 }
 
+fn replay_cmd(config: Option<PathBuf>, cmd: ReplayCmd) -> anyhow::Result<ExitCode> {
+    use nodes::app::replay;
+    let base = load_config(config.as_deref())?;
+    let label = cmd
+        .planner
+        .clone()
+        .unwrap_or_else(|| base.planner.kind.to_string());
+    // The configuration `vpsom run` (lockstep or not) ran with: `[run]`'s camera size.
+    let cfg = deploy::run_config(&base, &label)?;
+    let dir = if cmd.trace.is_dir() {
+        cmd.trace.clone()
+    } else {
+        cmd.trace
+            .parent()
+            .map(Path::to_path_buf)
+            .unwrap_or_default()
+    };
+    let out = (!cmd.check).then(|| {
+        cmd.out
+            .clone()
+            .unwrap_or_else(|| dir.join(format!("replay-{label}")))
+    });
+    let spec = replay::ReplaySpec {
+        trace: cmd.trace.clone(),
+        config: cfg,
+        check: cmd.check,
+        out: out.clone(),
+    };
+    let r = replay::replay(&spec)?;
+    print!("{r}");
+    if cmd.check {
+        return Ok(match &r.divergence {
+            None => {
+                println!("identical: every map, decision and goal reproduced exactly");
+                ExitCode::SUCCESS
+            }
+            Some(d) => {
+                println!("first divergence: {d}");
+                ExitCode::FAILURE
+            }
+        });
+    }
+    if let Some(o) = out {
+        println!(
+            "open loop (the robot moved as recorded): new trace, decisions.csv, map.json and \
+             (with a built-in scene) metrics.json in {}",
+            o.display()
+        );
+    }
+    Ok(ExitCode::SUCCESS)
+}
+
 fn doctor(config: Option<PathBuf>) -> anyhow::Result<ExitCode> {
     let (_cfg, from) = Config::load_or_default(config.as_deref())?;
     println!("config: {}", from.display());
@@ -603,8 +693,7 @@ fn node(
     s: SessionArgs,
     ns: String,
     out: PathBuf,
-    time_scale: f64,
-    gbv_load: usize,
+    (time_scale, gbv_load, live): (f64, usize, Option<u16>),
 ) -> anyhow::Result<ExitCode> {
     let cfg = deploy::run_config(&load_config(config.as_deref())?, &s.planner)?;
     let args = deploy::RunArgs {
@@ -617,6 +706,7 @@ fn node(
         config_file: config,
         gbv_load,
         nodes: vec![],
+        live,
     };
     match role {
         "sim" => deploy::sim_node(&args, &cfg)?,

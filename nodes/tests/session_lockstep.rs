@@ -41,8 +41,11 @@ fn recorded_session(tag: &str) -> (lockstep::SessionResult, PathBuf, PathBuf) {
     std::fs::create_dir_all(&dir).unwrap();
     let mcap = dir.join("trace.mcap");
     let mut s = spec("vpsom", Some(mcap.clone()));
-    // Small depth images keep the independent (Python) reader quick.
-    s.config.recorder.depth_decimation = 8;
+    // Small depth images keep the independent (Python) reader quick: the view profile's
+    // decimation, without its rate limits (every message handed over is checked below).
+    s.config.recorder.profile = runtime::recorder::Profile::View;
+    s.config.recorder.view.depth_decimation = 8;
+    s.config.recorder.view.max_hz.clear();
     let r = lockstep::run_session(&s, |_| {}).unwrap();
     (r, dir, mcap)
 }
@@ -99,7 +102,7 @@ fn vpsom_terminates_maps_every_object_and_its_trace_reads_back() {
 /// The same trace through an independent reader (Python `mcap`, CRCs on). `.ci/run` runs it with
 /// `--ignored` after making the venv; without `VPSOM_PYTHON` it fails, never skips.
 #[test]
-#[ignore = "needs VPSOM_PYTHON (a python with mcap and jsonschema); run by .ci/run with --ignored"]
+#[ignore = "needs VPSOM_PYTHON (a python with mcap and mcap-protobuf-support); run by .ci/run with --ignored"]
 fn vpsom_trace_reads_back_in_python_mcap() {
     let py = std::env::var("VPSOM_PYTHON")
         .expect("precondition: VPSOM_PYTHON must name a python with the `mcap` package");

@@ -1,5 +1,5 @@
 //! Cost of recording everything at the default rates, in real time:
-//! depth 640×480 at 30 Hz (decimated ×2 by the default config), object map (40 objects) at
+//! depth 640×480 at 30 Hz (full resolution: the default `replay` profile), object map (40 objects) at
 //! 10 Hz, estimated and true state at 50 Hz, LBV decisions (64 candidates) at 20 Hz, GBV at
 //! 0.5 Hz, deadline events at 20 Hz, neck goals at 20 Hz, a latency summary and a log line at 1 Hz.
 //!

@@ -169,6 +169,9 @@ pub fn run_session(
     };
     let rec = recorder.as_ref().map(|r| r.handle());
     let mut recorded = Recorded::default();
+    if let Some(r) = &rec {
+        r.record_nav_grid(&nav);
+    }
 
     let period = |hz: f64| (1e9 / hz).round() as u64;
     let dt = period(cfg.rates.state_hz);
@@ -194,6 +197,7 @@ pub fn run_session(
             mapper.integrate(&frame, &dets, &state)?;
             if let Some(r) = &rec {
                 r.record_depth(&frame);
+                r.record_detections(&dets);
                 recorded.depth += 1;
             }
             next_cam += cam_p;

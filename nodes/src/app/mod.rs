@@ -6,6 +6,7 @@
 //! | [`deploy`] | `vpsom run`: one process per node over iceoryx2 on the real clock, launched and watched |
 //! | [`lockstep`] | one process, one thread, simulated clock: deterministic sessions (bench, tests) |
 //! | [`bench`](mod@bench) | scenes × planners × seeds on the lockstep host, report and figures |
+//! | [`replay`] | `vpsom replay`: the mapper and planner re-run on a trace's recorded inputs |
 //! | [`sensing`] | `vpsom sensing`: a scripted tour of each scene, sensing scored against the ground truth |
 //! | [`topics`] | topic names of a live run |
 //!
@@ -14,6 +15,7 @@
 pub mod bench;
 pub mod deploy;
 pub mod lockstep;
+pub mod replay;
 pub mod sensing;
 pub mod topics;
 

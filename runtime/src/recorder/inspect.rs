@@ -1,11 +1,16 @@
-//! Reading traces back: [`info`] (topics, counts, time range, drops) and [`export_csv`] for the
-//! JSON channels. Both stream the file with constant memory and accept a file cut short by a
+//! Reading traces back: [`info`] (topics, counts, time range, drops) and [`export_csv`] for any
+//! channel (decoded through the schema in the file, [`super::decode`]). Both stream the file with constant memory and accept a file cut short by a
 //! crash (they read up to the last complete record and report the truncation). Given the first
 //! segment of a run (`trace.mcap`) or its directory, both read every segment of the run
 //! (`trace.1.mcap`, ...; see [`super::recover`]) as one trace.
 
+use super::decode::MessageType;
+use super::messages::RecorderStats;
 use super::schemas::{STATS_METADATA, topic};
 use super::{DropCounts, RecorderError};
+
+/// Schema name `foxglove::Encode` derives for [`RecorderStats`].
+const RECORDER_STATS_SCHEMA: &str = "recorderstats.RecorderStats";
 use mcap::records::Record;
 use mcap::sans_io::linear_reader::{LinearReadEvent, LinearReader, LinearReaderOptions};
 use std::collections::{BTreeMap, HashMap};
@@ -22,7 +27,7 @@ pub enum Item<'a> {
         id: u16,
         /// Schema name.
         name: &'a str,
-        /// Schema encoding (`jsonschema` for all of ours).
+        /// Schema encoding (`protobuf` for all of ours).
         encoding: &'a str,
         /// Schema text.
         data: &'a [u8],
@@ -33,7 +38,7 @@ pub enum Item<'a> {
         id: u16,
         /// Topic.
         topic: &'a str,
-        /// Message encoding (`json` for all of ours).
+        /// Message encoding (`protobuf` for all of ours).
         encoding: &'a str,
         /// Schema id (0 = none).
         schema_id: u16,
@@ -213,6 +218,8 @@ fn drops_from_metadata(m: &BTreeMap<String, String>) -> DropCounts {
             d.offered.insert(t.to_string(), n);
         } else if let Some(t) = k.strip_prefix("dropped:") {
             d.dropped.insert(t.to_string(), n);
+        } else if let Some(t) = k.strip_prefix("throttled:") {
+            d.throttled.insert(t.to_string(), n);
         }
     }
     d
@@ -257,6 +264,9 @@ pub fn info(path: &Path) -> Result<TraceInfo, RecorderError> {
                 for (t, n) in b.dropped {
                     *a.dropped.entry(t).or_insert(0) += n;
                 }
+                for (t, n) in b.throttled {
+                    *a.throttled.entry(t).or_insert(0) += n;
+                }
                 Some(a)
             }
             (a, b) => a.or(b),
@@ -287,6 +297,7 @@ fn info_one(path: &Path) -> Result<TraceInfo, RecorderError> {
     let mut by_id: HashMap<u16, usize> = HashMap::new();
     let mut metadata = BTreeMap::new();
     let mut last_stats: Option<Vec<u8>> = None;
+    let mut stats_type: Option<(String, String, Vec<u8>)> = None;
     let end = scan(path, |item| match item {
         Item::Channel {
             id,
@@ -329,16 +340,34 @@ fn info_one(path: &Path) -> Result<TraceInfo, RecorderError> {
         Item::Metadata { name, values } => {
             metadata.insert(name.to_string(), values.clone());
         }
-        Item::Schema { .. } => {}
+        Item::Schema {
+            name,
+            encoding,
+            data,
+            ..
+        } => {
+            if name == RECORDER_STATS_SCHEMA {
+                stats_type = Some((name.to_string(), encoding.to_string(), data.to_vec()));
+            }
+        }
     })?;
     let drops = match metadata.get(STATS_METADATA) {
         Some(m) => Some(drops_from_metadata(m)),
         None => last_stats.and_then(|d| {
-            let v: serde_json::Value = serde_json::from_slice(&d).ok()?;
-            Some(DropCounts {
-                offered: serde_json::from_value(v.get("offered")?.clone()).ok()?,
-                dropped: serde_json::from_value(v.get("dropped")?.clone()).ok()?,
-            })
+            let (name, enc, data) = stats_type?;
+            let t = MessageType::from_schema(&name, &enc, &data).ok()?;
+            let s: RecorderStats = t.to_value(&d).ok()?;
+            let mut c = DropCounts::default();
+            for x in s.topics {
+                if x.offered > 0 || x.dropped > 0 {
+                    c.offered.insert(x.topic.clone(), x.offered);
+                    c.dropped.insert(x.topic.clone(), x.dropped);
+                }
+                if x.throttled > 0 {
+                    c.throttled.insert(x.topic, x.throttled);
+                }
+            }
+            Some(c)
         }),
     };
     let start_ns = topics.iter().filter_map(|t| t.first_ns).min();
@@ -395,8 +424,8 @@ impl fmt::Display for TraceInfo {
         }
         writeln!(
             f,
-            "{:<22} {:>9} {:>10} {:>10} {:>8}  schema",
-            "topic", "messages", "first s", "last s", "dropped"
+            "{:<22} {:>9} {:>10} {:>10} {:>8} {:>9}  schema",
+            "topic", "messages", "first s", "last s", "dropped", "throttled"
         )?;
         for t in &self.topics {
             let dropped = self
@@ -404,19 +433,30 @@ impl fmt::Display for TraceInfo {
                 .as_ref()
                 .and_then(|d| d.dropped.get(&t.topic))
                 .map_or("-".to_string(), u64::to_string);
+            let throttled = self
+                .drops
+                .as_ref()
+                .and_then(|d| d.throttled.get(&t.topic))
+                .map_or("-".to_string(), u64::to_string);
             writeln!(
                 f,
-                "{:<22} {:>9} {:>10} {:>10} {:>8}  {}",
+                "{:<22} {:>9} {:>10} {:>10} {:>8} {:>9}  {}",
                 t.topic,
                 t.messages,
                 secs(t.first_ns),
                 secs(t.last_ns),
                 dropped,
+                throttled,
                 t.schema
             )?;
         }
         match &self.drops {
-            Some(d) => write!(f, "dropped total: {}", d.total_dropped()),
+            Some(d) => write!(
+                f,
+                "dropped total: {}, throttled total: {}",
+                d.total_dropped(),
+                d.total_throttled()
+            ),
             None => write!(f, "dropped total: unknown (no recorder stats in file)"),
         }
     }
@@ -452,71 +492,113 @@ fn flatten(v: &serde_json::Value) -> Vec<(String, String)> {
     out
 }
 
-/// Write the JSON messages of `topic` as CSV (`log_time_ns` then one column per flattened key,
-/// in first-seen order). Returns the number of rows. Two streaming passes, constant memory.
+/// How the messages of one channel are read.
+#[derive(Debug, Clone)]
+enum Decoder {
+    /// `json` messages.
+    Json,
+    /// `protobuf` messages of a schema in the file.
+    Proto(MessageType),
+}
+
+impl Decoder {
+    fn of(encoding: &str, schema: Option<&(String, String, Vec<u8>)>) -> Result<Self, String> {
+        match (encoding, schema) {
+            ("json", _) => Ok(Decoder::Json),
+            ("protobuf", Some((name, enc, data))) => {
+                MessageType::from_schema(name, enc, data).map(Decoder::Proto)
+            }
+            ("protobuf", None) => Err("protobuf channel without a schema".into()),
+            (e, _) => Err(format!(
+                "message encoding {e:?}: CSV export reads \"protobuf\" and \"json\""
+            )),
+        }
+    }
+
+    fn json(&self, data: &[u8]) -> Result<serde_json::Value, String> {
+        match self {
+            Decoder::Json => {
+                serde_json::from_slice(data).map_err(|e| format!("message is not JSON: {e}"))
+            }
+            Decoder::Proto(t) => t.to_json(data),
+        }
+    }
+}
+
+/// Write the messages of `topic` as CSV (`log_time_ns` then one column per flattened key of the
+/// message's JSON form, in first-seen order). Returns the number of rows. Two streaming passes,
+/// constant memory.
 pub fn export_csv(path: &Path, topic: &str, out: &mut dyn Write) -> Result<u64, RecorderError> {
     let files = files_of(path);
-    // Channel ids of `topic`, per segment (each segment numbers its channels itself).
-    let mut ids: Vec<Vec<u16>> = Vec::new();
-    let mut encoding = None;
+    // Decoders of `topic`'s channels, per segment (each segment numbers its channels itself).
+    let mut decoders: Vec<HashMap<u16, Decoder>> = Vec::new();
     let mut topics = Vec::new();
     let mut columns: Vec<String> = Vec::new();
     let mut col_index: HashMap<String, usize> = HashMap::new();
     let mut bad: Option<String> = None;
     for file in &files {
-        let mut seg_ids = Vec::new();
+        let mut seg: HashMap<u16, Decoder> = HashMap::new();
+        let mut schemas: HashMap<u16, (String, String, Vec<u8>)> = HashMap::new();
         scan(file, |item| match item {
+            Item::Schema {
+                id,
+                name,
+                encoding,
+                data,
+            } => {
+                schemas.insert(id, (name.into(), encoding.into(), data.to_vec()));
+            }
             Item::Channel {
                 id,
                 topic: t,
                 encoding: e,
+                schema_id,
                 ..
             } => {
                 // Channels are listed in the data and again in the summary section.
                 if !topics.iter().any(|x| x == t) {
                     topics.push(t.to_string());
                 }
-                if t == topic {
-                    seg_ids.push(id);
-                    encoding = Some(e.to_string());
-                }
-            }
-            Item::Message { channel, data, .. } if seg_ids.contains(&channel) => {
-                match serde_json::from_slice::<serde_json::Value>(data) {
-                    Ok(v) => {
-                        for (k, _) in flatten(&v) {
-                            if !col_index.contains_key(&k) {
-                                col_index.insert(k.clone(), columns.len());
-                                columns.push(k);
-                            }
+                if t == topic && !seg.contains_key(&id) {
+                    match Decoder::of(e, schemas.get(&schema_id)) {
+                        Ok(d) => {
+                            seg.insert(id, d);
+                        }
+                        Err(e) => {
+                            bad.get_or_insert(e);
                         }
                     }
-                    Err(e) => {
-                        bad.get_or_insert(format!("message is not JSON: {e}"));
+                }
+            }
+            Item::Message { channel, data, .. } => {
+                if let Some(d) = seg.get(&channel) {
+                    match d.json(data) {
+                        Ok(v) => {
+                            for (k, _) in flatten(&v) {
+                                if !col_index.contains_key(&k) {
+                                    col_index.insert(k.clone(), columns.len());
+                                    columns.push(k);
+                                }
+                            }
+                        }
+                        Err(e) => {
+                            bad.get_or_insert(e);
+                        }
                     }
                 }
             }
             _ => {}
         })?;
-        ids.push(seg_ids);
-    }
-    match encoding.as_deref() {
-        None => {
-            return Err(read_err(
-                path,
-                format!("no topic {topic}; topics: {}", topics.join(", ")),
-            ));
-        }
-        Some("json") => {}
-        Some(e) => {
-            return Err(read_err(
-                path,
-                format!("{topic} has message encoding {e:?}, CSV export needs \"json\""),
-            ));
-        }
+        decoders.push(seg);
     }
     if let Some(b) = bad {
         return Err(read_err(path, format!("{topic}: {b}")));
+    }
+    if decoders.iter().all(HashMap::is_empty) {
+        return Err(read_err(
+            path,
+            format!("no topic {topic}; topics: {}", topics.join(", ")),
+        ));
     }
     let csv_err = |e: csv::Error| read_err(path, format!("cannot write CSV: {e}"));
     let mut csv = csv::Writer::from_writer(out);
@@ -525,17 +607,17 @@ pub fn export_csv(path: &Path, topic: &str, out: &mut dyn Write) -> Result<u64, 
     let mut rows = 0u64;
     let mut failed = None;
     let mut row = vec![String::new(); columns.len() + 1];
-    for (file, seg_ids) in files.iter().zip(&ids) {
+    for (file, seg) in files.iter().zip(&decoders) {
         scan(file, |item| {
             if let Item::Message {
                 channel,
                 log_time,
                 data,
             } = item
-                && seg_ids.contains(&channel)
+                && let Some(d) = seg.get(&channel)
                 && failed.is_none()
             {
-                let Ok(v) = serde_json::from_slice::<serde_json::Value>(data) else {
+                let Ok(v) = d.json(data) else {
                     return;
                 };
                 row.iter_mut().for_each(String::clear);

@@ -1,12 +1,14 @@
 //! The MCAP recorder: every topic of a session into one file that Foxglove and any MCAP tool can
-//! open.
+//! open, and that `vpsom replay` can re-run the robot's logic on.
 //!
 //! | file | what |
 //! |---|---|
-//! | `mod.rs` | [`Recorder`], [`RecorderHandle`], config, drop counting |
-//! | `writer.rs` | the writer thread: chunks, flushing, stats |
-//! | `convert.rs` | messages → JSON of their schemas |
-//! | `schemas.rs` | topics and their JSON Schemas |
+//! | `mod.rs` | [`Recorder`], [`RecorderHandle`], config and profiles, drop counting |
+//! | `writer.rs` | the writer thread: encoding, rate limits, chunks, flushing, stats |
+//! | `convert.rs` | our messages → `foxglove::messages::*` and [`messages`] values |
+//! | `messages.rs` | our own channels' types (protobuf, schemas derived by `foxglove::Encode`) |
+//! | `schemas.rs` | topics and the schema of every channel |
+//! | `decode.rs` | reading any channel back through the schema in the file |
 //! | `inspect.rs` | reading traces back: `info`, CSV export (all segments of a run) |
 //! | `recover.rs` | torn-file recovery and the run's segments |
 //!
@@ -15,8 +17,18 @@
 //! the [`mcap::Writer`]. Producers hold a cloneable [`RecorderHandle`] whose `record_*` methods
 //! never block and never allocate for the real-time kinds (state, goals, deadline events, planner
 //! decisions): small messages are copied by value into a bounded crossbeam channel; large ones
-//! (`DepthFrame`, `ObjectMap`, `PlannerDecision`) are copied into preallocated boxes taken from a
-//! pool. Conversion to the on-disk format happens on the writer thread.
+//! (`DepthFrame`, `Detections`, `ObjectMap`, `PlannerDecision`) are copied into preallocated
+//! boxes taken from a pool. Conversion and encoding happen on the writer thread, which also
+//! publishes every encoded message to the live view ([`live`]) when one is attached.
+//!
+//! # Profiles: `replay` and `view`
+//! `recorder.profile = "replay"` (the default) records every input the mapper and planner
+//! consume, losslessly: full-resolution depth (`/camera/depth` + `/camera/depth/meta`), the raw
+//! detections (`/detections`), every robot state (`/robot/state`), the navigation grid
+//! (`/nav/grid`), plus what they published. `"view"` is for long runs: every topic named in
+//! `[recorder.view.max_hz]` is written at most that often (simulated time; 0 = not at all) and
+//! depth is decimated by `recorder.view.depth_decimation`. What a rate limit leaves out is
+//! counted per topic as `throttled` (not a drop) in `/recorder/stats` and the final metadata.
 //!
 //! # Falling behind
 //! Depth frames do not go through the channel: they wait in a small ring of
@@ -32,7 +44,8 @@
 //! to the last completed chunk reads back (`inspect` reads truncated files), and
 //! [`recover::recover`] (`vpsom trace recover IN OUT`) turns such a file into a finished, indexed
 //! MCAP. On SIGINT/SIGTERM the host calls [`Recorder::finish`]; dropping the [`Recorder`]
-//! finishes the file too.
+//! finishes the file too. (This is why the recorder keeps its own [`mcap::Writer`] rather than
+//! foxglove's `McapWriter`: that one has no age bound on chunks, no segments and no recovery.)
 //!
 //! # Segments: a restarted recorder never truncates
 //! [`Recorder::create`] starts a new run (truncating `trace.mcap`); [`Recorder::resume`] is what a
@@ -41,52 +54,61 @@
 //! (see [`recover`]). `inspect::info` and
 //! `inspect::export_csv` read all segments of a run as one.
 //!
-//! # Encoding: JSON + JSON Schema for everything, also the Foxglove well-known schemas
-//! Every channel uses message encoding `json` and schema encoding `jsonschema`. For the Foxglove
-//! well-known types the schema is named `foxglove.<Type>` (Foxglove recognises the type by name;
-//! `bytes` fields are base64 strings), see [`schemas`]. Chosen over the `foxglove` crate's
-//! protobuf schemas because: (1) no extra dependency tree (prost, tracing, parking_lot, …, ~46 s of
-//! build on every clean CI run); (2) any MCAP tool (`mcap cat --json`, Python `mcap`) decodes every
-//! channel without a protobuf runtime; (3) each message is checked against a real schema in the
-//! tests (a JSON Schema validation is a stronger check than a protobuf decode, which accepts
-//! almost any bytes). The cost is size: base64 depth is 4/3 of the raw bytes before compression
-//! (measured in `examples/recorder_load.rs`).
+//! # Encoding: protobuf, Foxglove's own schemas
+//! Every channel is `protobuf` with a `FileDescriptorSet` schema. The Foxglove well-known types
+//! are `foxglove::messages::*` (schema `foxglove.RawImage`, ...), so Foxglove shows them natively
+//! and any protobuf reader (Python `mcap-protobuf-support`) decodes them; depth is raw `16UC1`
+//! bytes. Our own types ([`messages`]) have schemas derived by `foxglove::Encode`.
 //!
 //! # Topics
 //! | topic | schema | from |
 //! |---|---|---|
-//! | `/camera/depth` | `foxglove.RawImage` (`16UC1`, decimated) | [`RecorderHandle::record_depth`] |
+//! | `/camera/depth` | `foxglove.RawImage` (`16UC1`) | [`RecorderHandle::record_depth`] |
+//! | `/camera/calibration` | `foxglove.CameraCalibration` | same |
+//! | `/camera/depth/meta` | [`messages::DepthMeta`] (header, intrinsics, camera pose) | same |
+//! | `/camera/detections` | `foxglove.ImageAnnotations` on the depth image | [`RecorderHandle::record_detections`] |
+//! | `/detections` | [`messages::DetectionsRaw`] | same |
+//! | `/robot/state` | [`messages::RobotStateRaw`] | [`RecorderHandle::record_state`] |
+//! | `/nav/grid` | [`messages::OccupancyGridRaw`] | [`RecorderHandle::record_nav_grid`] |
 //! | `/tf` | `foxglove.FrameTransforms` world→base→neck→camera | [`RecorderHandle::record_state`] |
 //! | `/trajectory` | `foxglove.PosesInFrame` (estimated base) | state, at `trajectory_hz` |
 //! | `/truth/tf`, `/truth/trajectory` | same, frame `base_true` | [`RecorderHandle::record_true_state`] |
 //! | `/truth/objects` | `foxglove.SceneUpdate` | [`RecorderSetup::truth`] |
 //! | `/map/objects` | `foxglove.SceneUpdate` | [`RecorderHandle::record_map`] |
+//! | `/map/meta` | [`messages::MapMeta`] (the frames each map consumed) | same |
 //! | `/planner/gbv`, `/planner/lbv` | `foxglove.SceneUpdate` frusta | [`RecorderHandle::record_decision`] |
-//! | `/planner/decisions` | `vpsom.PlannerDecision` | same |
-//! | `/planner/nav_goal`, `/planner/neck_goal` | `vpsom.NavGoal`, `vpsom.NeckGoal` | `record_*_goal` |
-//! | `/runtime/deadline` | `vpsom.DeadlineEvent` | [`RecorderHandle::record_deadline`] |
-//! | `/runtime/latency` | `vpsom.LatencySummary` | [`RecorderHandle::record_latency`] |
+//! | `/planner/decisions` | [`messages::PlannerDecision`] (every F(v) term) | same |
+//! | `/planner/nav_goal`, `/planner/neck_goal` | [`messages::NavGoal`], [`messages::NeckGoal`] | `record_*_goal` |
+//! | `/runtime/deadline` | [`messages::DeadlineEvent`] | [`RecorderHandle::record_deadline`] |
+//! | `/runtime/latency` | [`messages::LatencySummary`] | [`RecorderHandle::record_latency`] |
 //! | `/log` | `foxglove.Log` | [`RecorderHandle::log`] |
-//! | `/metrics` | `vpsom.Metrics` | [`RecorderHandle::record_metrics`] |
-//! | `/recorder/stats` | `vpsom.RecorderStats` | the writer, every `stats_interval_s` |
+//! | `/metrics` | [`messages::Metrics`] | [`RecorderHandle::record_metrics`] |
+//! | `/recorder/stats` | [`messages::RecorderStats`] | the writer, every `stats_interval_s` |
 //!
 //! Log time of a message is its simulated/robot time (`header.sim_time_ns`), publish time its
 //! monotonic stamp (`header.stamp_ns`), so lockstep and deployment traces share one time base.
-//! `config/foxglove-layout.json` is a Foxglove layout for these topics (3D, depth, LBV exec time).
+//! `config/foxglove-layout.json` is a Foxglove layout for these topics (3D, depth with the
+//! detection boxes, LBV exec time).
 
-mod convert;
+pub mod convert;
+pub mod decode;
 pub mod inspect;
+pub mod live;
+pub mod messages;
 pub mod recover;
 pub mod schemas;
 mod writer;
+
+/// The `foxglove` crate the recorder writes with (its messages decode a trace's Foxglove channels).
+pub use foxglove;
 
 use crate::config::{Checker, ConfigError};
 use crossbeam::channel::{Receiver, Sender, TrySendError};
 use crossbeam::queue::ArrayQueue;
 use serde::{Deserialize, Serialize};
 use shm_types::{
-    DeadlineEvent, DepthFrame, NavGoal, NeckGoal, ObjectMap, PlannerDecision, RobotState,
-    ZeroValid, boxed_zeroed,
+    DeadlineEvent, DepthFrame, Detections, NavGoal, NeckGoal, ObjectMap, OccupancyGrid,
+    PlannerDecision, RobotState, ZeroValid, boxed_zeroed,
 };
 use std::path::{Path, PathBuf};
 use std::sync::Arc;
@@ -105,10 +127,43 @@ pub enum Compression {
     None,
 }
 
+/// What a recording keeps (`recorder.profile`).
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Deserialize, Serialize)]
+#[serde(rename_all = "lowercase")]
+pub enum Profile {
+    /// Every input of the mapper and planner, losslessly, and what they published.
+    Replay,
+    /// Per-topic rate limits and decimated depth, for long runs.
+    View,
+}
+
+impl Profile {
+    /// `replay` or `view`.
+    pub fn name(self) -> &'static str {
+        match self {
+            Profile::Replay => "replay",
+            Profile::View => "view",
+        }
+    }
+}
+
+/// `[recorder.view]`: the limits of the `view` profile.
+#[derive(Debug, Clone, PartialEq, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct ViewProfile {
+    /// Depth images (and their detection boxes) are decimated by this factor in x and y.
+    pub depth_decimation: u32,
+    /// Most messages per simulated second, per topic (0 = not recorded; a topic not listed is
+    /// not limited).
+    pub max_hz: std::collections::BTreeMap<String, f64>,
+}
+
 /// `[recorder]` section.
 #[derive(Debug, Clone, PartialEq, Deserialize)]
 #[serde(deny_unknown_fields)]
 pub struct RecorderConfig {
+    /// `replay` (lossless inputs) or `view` (rate-limited).
+    pub profile: Profile,
     /// Chunk compression: "zstd", "lz4" or "none".
     pub compression: Compression,
     /// Compression level (0 = the codec's default).
@@ -121,10 +176,8 @@ pub struct RecorderConfig {
     pub queue_len: usize,
     /// Depth frames waiting for the writer; a new frame replaces the oldest when full.
     pub depth_queue_len: usize,
-    /// Preallocated copies each of `ObjectMap` and `PlannerDecision` in flight.
+    /// Preallocated copies each of `Detections`, `ObjectMap` and `PlannerDecision` in flight.
     pub pool_len: usize,
-    /// Depth images are decimated by this factor in each direction (1 = full resolution).
-    pub depth_decimation: u32,
     /// Period of the `/recorder/stats` messages, seconds.
     pub stats_interval_s: f64,
     /// Rate of the `/trajectory` messages (simulated time), Hz.
@@ -133,6 +186,10 @@ pub struct RecorderConfig {
     pub trajectory_max_poses: usize,
     /// Length of the drawn candidate-view frusta, metres.
     pub frustum_length_m: f64,
+    /// Port of the live view when `vpsom run --live` names none.
+    pub live_port: u16,
+    /// Limits of the `view` profile.
+    pub view: ViewProfile,
 }
 
 impl Default for RecorderConfig {
@@ -143,6 +200,22 @@ impl Default for RecorderConfig {
 }
 
 impl RecorderConfig {
+    /// Depth decimation in force: 1 (exact) in the `replay` profile.
+    pub fn depth_decimation(&self) -> u32 {
+        match self.profile {
+            Profile::Replay => 1,
+            Profile::View => self.view.depth_decimation,
+        }
+    }
+
+    /// Rate limit of `topic` in force, Hz (`None`: every message; `Some(0.0)`: none).
+    pub fn max_hz(&self, topic: &str) -> Option<f64> {
+        match self.profile {
+            Profile::Replay => None,
+            Profile::View => self.view.max_hz.get(topic).copied(),
+        }
+    }
+
     /// Range-check.
     pub fn validate(&self, c: &Checker) -> Result<(), ConfigError> {
         c.count(
@@ -167,11 +240,22 @@ impl RecorderConfig {
         c.count("recorder.depth_queue_len", self.depth_queue_len, 1, 64)?;
         c.count("recorder.pool_len", self.pool_len, 1, 256)?;
         c.count(
-            "recorder.depth_decimation",
-            self.depth_decimation as usize,
+            "recorder.view.depth_decimation",
+            self.view.depth_decimation as usize,
             1,
             16,
         )?;
+        let topics: Vec<&str> = schemas::channels().iter().map(|d| d.topic).collect();
+        for (t, &hz) in &self.view.max_hz {
+            let key = format!("recorder.view.max_hz.\"{t}\"");
+            c.require(
+                topics.contains(&t.as_str()),
+                &key,
+                hz,
+                &format!("no such topic; topics: {}", topics.join(", ")),
+            )?;
+            c.in_range(&key, hz, 0.0, 1000.0)?;
+        }
         c.in_range(
             "recorder.stats_interval_s",
             self.stats_interval_s,
@@ -245,6 +329,8 @@ pub struct RecorderSetup {
     pub mount: MountGeometry,
     /// Ground-truth objects (empty in deployment on a real robot).
     pub truth: Vec<TruthBox>,
+    /// Serve the recorded channels live to Foxglove on this port ([`live`]; 0 = any free port).
+    pub live_port: Option<u16>,
 }
 
 /// Latency of one node or path over the last summary period.
@@ -316,6 +402,10 @@ pub enum LogLevel {
 pub enum Kind {
     /// Depth frames.
     Depth = 0,
+    /// Detections.
+    Detections,
+    /// Navigation grids.
+    NavGrid,
     /// Estimated robot state.
     State,
     /// True robot state.
@@ -340,8 +430,10 @@ pub enum Kind {
 
 impl Kind {
     /// Every kind, in index order.
-    pub const ALL: [Kind; 11] = [
+    pub const ALL: [Kind; 13] = [
         Kind::Depth,
+        Kind::Detections,
+        Kind::NavGrid,
         Kind::State,
         Kind::TrueState,
         Kind::Map,
@@ -354,11 +446,14 @@ impl Kind {
         Kind::Metrics,
     ];
 
-    /// The topic that carries exactly one message per accepted input of this kind.
+    /// The topic that carries exactly one message per accepted input of this kind (in the
+    /// `replay` profile; the `view` profile's rate limits leave some out, counted as throttled).
     pub fn topic(self) -> &'static str {
         use schemas::topic;
         match self {
             Kind::Depth => topic::DEPTH,
+            Kind::Detections => topic::DETECTIONS,
+            Kind::NavGrid => topic::NAV_GRID,
             Kind::State => topic::TF,
             Kind::TrueState => topic::TRUTH_TF,
             Kind::Map => topic::MAP,
@@ -398,12 +493,20 @@ pub struct DropCounts {
     pub offered: std::collections::BTreeMap<String, u64>,
     /// Inputs dropped per primary topic (never written).
     pub dropped: std::collections::BTreeMap<String, u64>,
+    /// Messages left out by the profile's rate limits, per topic (not drops).
+    #[serde(default)]
+    pub throttled: std::collections::BTreeMap<String, u64>,
 }
 
 impl DropCounts {
     /// Sum of all drops.
     pub fn total_dropped(&self) -> u64 {
         self.dropped.values().sum()
+    }
+
+    /// Sum of all throttled messages.
+    pub fn total_throttled(&self) -> u64 {
+        self.throttled.values().sum()
     }
 }
 
@@ -438,6 +541,7 @@ struct Shared {
     counters: Counters,
     depth_ready: ArrayQueue<Box<DepthFrame>>,
     depth_pool: Pool<DepthFrame>,
+    detections_pool: Pool<Detections>,
     map_pool: Pool<ObjectMap>,
     decision_pool: Pool<PlannerDecision>,
 }
@@ -463,6 +567,8 @@ impl Shared {
 enum Msg {
     State(RobotState),
     TrueState(RobotState),
+    Detections(Box<Detections>),
+    NavGrid(Box<OccupancyGrid>),
     Map(Box<ObjectMap>),
     Decision(Box<PlannerDecision>),
     NavGoal(NavGoal),
@@ -501,6 +607,9 @@ pub enum RecorderError {
         /// Cause.
         source: mcap::McapError,
     },
+    /// The live-view server could not be started.
+    #[error("cannot start the live view: {0}")]
+    Live(String),
     /// The writer thread could not be started.
     #[error("cannot start the recorder thread: {0}")]
     Spawn(std::io::Error),
@@ -556,6 +665,7 @@ impl RecorderHandle {
     fn recycle(&self, m: Msg) {
         match m {
             Msg::Map(b) => self.shared.map_pool.give(b),
+            Msg::Detections(b) => self.shared.detections_pool.give(b),
             Msg::Decision(b) => self.shared.decision_pool.give(b),
             _ => {}
         }
@@ -589,7 +699,36 @@ impl RecorderHandle {
         let _ = self.wake.try_send(());
     }
 
-    /// Record the estimated robot state (`/tf`, `/trajectory`).
+    /// Record detections (`/detections`, and `/camera/detections` drawn on the depth image of
+    /// the frame they belong to), copied into a pooled buffer.
+    pub fn record_detections(&self, d: &Detections) {
+        match self.shared.detections_pool.take() {
+            Some(mut b) => {
+                convert::copy_detections(d, &mut b);
+                self.push(Kind::Detections, Msg::Detections(b));
+            }
+            None => {
+                self.shared.counters.offer(Kind::Detections);
+                self.shared.counters.drop_one(Kind::Detections);
+            }
+        }
+    }
+
+    /// Record the navigation grid (`/nav/grid`). Allocates a copy: grids are rare (the sim
+    /// publishes one a second); not for a real-time thread.
+    pub fn record_nav_grid(&self, g: &OccupancyGrid) {
+        let mut b = boxed_zeroed::<OccupancyGrid>();
+        b.header = g.header;
+        b.origin = g.origin;
+        b.resolution = g.resolution;
+        b.width = g.width;
+        b.height = g.height;
+        let n = (g.width as usize * g.height as usize).min(g.cells.len());
+        b.cells[..n].copy_from_slice(&g.cells[..n]);
+        self.push(Kind::NavGrid, Msg::NavGrid(b));
+    }
+
+    /// Record the estimated robot state (`/robot/state`, `/tf`, `/trajectory`).
     pub fn record_state(&self, state: &RobotState) {
         self.push(Kind::State, Msg::State(*state));
     }
@@ -683,6 +822,7 @@ pub struct Recorder {
     handle: RecorderHandle,
     thread: Option<JoinHandle<Result<RecorderSummary, RecorderError>>>,
     path: PathBuf,
+    live_port: Option<u16>,
     /// Recovery of the earlier segments, on a background thread ([`Recorder::resume`]).
     recovery: Option<JoinHandle<Vec<RecoveredSegment>>>,
     recovered: Vec<RecoveredSegment>,
@@ -778,10 +918,12 @@ impl Recorder {
             counters: Counters::default(),
             depth_ready: ArrayQueue::new(cfg.depth_queue_len),
             depth_pool: Pool::new(cfg.depth_queue_len + 1),
+            detections_pool: Pool::new(cfg.pool_len),
             map_pool: Pool::new(cfg.pool_len),
             decision_pool: Pool::new(cfg.pool_len),
         });
         let w = writer::WriterState::open(path, cfg, &setup)?;
+        let live_port = w.live_port();
         let sh = Arc::clone(&shared);
         let thread = std::thread::Builder::new()
             .name("recorder".into())
@@ -791,9 +933,15 @@ impl Recorder {
             handle: RecorderHandle { tx, wake, shared },
             thread: Some(thread),
             path: path.to_path_buf(),
+            live_port,
             recovery: None,
             recovered: Vec::new(),
         })
+    }
+
+    /// The port the live view serves on, if [`RecorderSetup::live_port`] asked for one.
+    pub fn live_port(&self) -> Option<u16> {
+        self.live_port
     }
 
     /// A producer handle (clone it freely).
@@ -862,12 +1010,20 @@ mod tests {
     fn bad_values_are_named() {
         let f = Path::new("bad.toml");
         let c = Checker::new("bad.toml");
-        let r = parse(f, "[recorder]\ndepth_decimation = 0\n").unwrap();
+        let r = parse(f, "[recorder.view]\ndepth_decimation = 0\n").unwrap();
         let e = r.recorder.validate(&c).unwrap_err();
         assert_eq!(
             e.to_string(),
-            "bad.toml: recorder.depth_decimation = 0: must be in [1, 16]"
+            "bad.toml: recorder.view.depth_decimation = 0: must be in [1, 16]"
         );
+        let r = parse(f, "[recorder.view.max_hz]\n\"/camera/dept\" = 2.0\n").unwrap();
+        let e = r.recorder.validate(&c).unwrap_err();
+        assert_eq!(e.key(), "recorder.view.max_hz.\"/camera/dept\"", "{e}");
+        assert!(e.to_string().contains("no such topic"), "{e}");
+        let r = parse(f, "[recorder.view.max_hz]\n\"/tf\" = -1.0\n").unwrap();
+        assert!(r.recorder.validate(&c).is_err());
+        let e = parse(f, "[recorder]\nprofile = \"fast\"\n").unwrap_err();
+        assert_eq!(e.key(), "recorder.profile", "{e}");
         let r = parse(f, "[recorder]\nflush_interval_s = 0.0\n").unwrap();
         assert_eq!(
             r.recorder.validate(&c).unwrap_err().key(),
@@ -888,6 +1044,7 @@ mod tests {
             counters: Counters::default(),
             depth_ready: ArrayQueue::new(2),
             depth_pool: Pool::new(3),
+            detections_pool: Pool::new(1),
             map_pool: Pool::new(1),
             decision_pool: Pool::new(1),
         });

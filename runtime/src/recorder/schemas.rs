@@ -1,17 +1,27 @@
-//! Topic names and the JSON Schemas of every channel.
-//!
-//! Foxglove well-known types are described with the field names, types and enum values of the
-//! Foxglove schemas (<https://docs.foxglove.dev/docs/visualization/message-schemas>): a timestamp
-//! is `{sec, nsec}`, `bytes` are base64 strings, enums are integers. Our own types are named
-//! `vpsom.<Type>`. Every object property we write is listed as `required`, so a validator catches
-//! a missing field as well as a wrong type.
+//! Topic names and the schema of every channel: Foxglove's protobuf schemas
+//! (`foxglove::messages::*`) and the ones `foxglove::Encode` derives for [`super::messages`].
+//! Every channel's message encoding is `protobuf`, its schema a `FileDescriptorSet`.
 
-use serde_json::{Value, json};
+use super::messages as own;
+use foxglove::messages as fg;
+use foxglove::{Encode, Schema};
 
 /// Topic names.
 pub mod topic {
-    /// Depth image (`foxglove.RawImage`).
+    /// Depth image (`foxglove.RawImage`, `16UC1`).
     pub const DEPTH: &str = "/camera/depth";
+    /// Calibration of the depth image (`foxglove.CameraCalibration`).
+    pub const CALIBRATION: &str = "/camera/calibration";
+    /// The rest of each depth frame: header, intrinsics, camera pose.
+    pub const DEPTH_META: &str = "/camera/depth/meta";
+    /// Detection boxes drawn on the depth image (`foxglove.ImageAnnotations`).
+    pub const ANNOTATIONS: &str = "/camera/detections";
+    /// The detections, every field (for replay).
+    pub const DETECTIONS: &str = "/detections";
+    /// The estimated robot state, every field (for replay).
+    pub const STATE: &str = "/robot/state";
+    /// The navigation grid the planner plans on (for replay).
+    pub const NAV_GRID: &str = "/nav/grid";
     /// Estimated transforms world→base→neck→camera.
     pub const TF: &str = "/tf";
     /// Estimated base trajectory.
@@ -24,6 +34,8 @@ pub mod topic {
     pub const TRUTH_OBJECTS: &str = "/truth/objects";
     /// Estimated cuboids.
     pub const MAP: &str = "/map/objects";
+    /// What each map consumed (frames, counts).
+    pub const MAP_META: &str = "/map/meta";
     /// GBV candidate frusta and chosen view.
     pub const GBV: &str = "/planner/gbv";
     /// LBV candidate frusta and chosen view.
@@ -51,514 +63,58 @@ pub const STATS_METADATA: &str = "recorder_stats";
 /// Name of the MCAP Metadata record with the session facts.
 pub const SESSION_METADATA: &str = "session";
 
-/// `(topic, schema name, schema)` of every channel, in the order they are created.
-pub fn channels() -> Vec<(&'static str, &'static str, Value)> {
+/// One channel of a trace.
+#[derive(Debug, Clone)]
+pub struct ChannelDef {
+    /// Topic.
+    pub topic: &'static str,
+    /// Schema (name, encoding `protobuf`, `FileDescriptorSet`).
+    pub schema: Schema,
+    /// Message encoding (`protobuf`).
+    pub encoding: String,
+}
+
+fn def<T: Encode>(topic: &'static str) -> ChannelDef {
+    ChannelDef {
+        topic,
+        // Every type here has a schema (the well-known ones and the derived ones).
+        schema: T::get_schema().unwrap_or_else(|| Schema::new("", "", Vec::new())),
+        encoding: T::get_message_encoding(),
+    }
+}
+
+/// Every channel, in the order they are created.
+pub fn channels() -> Vec<ChannelDef> {
     use topic::*;
     vec![
-        (DEPTH, "foxglove.RawImage", raw_image()),
-        (TF, "foxglove.FrameTransforms", frame_transforms()),
-        (TRAJECTORY, "foxglove.PosesInFrame", poses_in_frame()),
-        (TRUTH_TF, "foxglove.FrameTransforms", frame_transforms()),
-        (TRUTH_TRAJECTORY, "foxglove.PosesInFrame", poses_in_frame()),
-        (TRUTH_OBJECTS, "foxglove.SceneUpdate", scene_update()),
-        (MAP, "foxglove.SceneUpdate", scene_update()),
-        (GBV, "foxglove.SceneUpdate", scene_update()),
-        (LBV, "foxglove.SceneUpdate", scene_update()),
-        (DECISIONS, "vpsom.PlannerDecision", planner_decision()),
-        (NAV_GOAL, "vpsom.NavGoal", nav_goal()),
-        (NECK_GOAL, "vpsom.NeckGoal", neck_goal()),
-        (DEADLINE, "vpsom.DeadlineEvent", deadline_event()),
-        (LATENCY, "vpsom.LatencySummary", latency_summary()),
-        (LOG, "foxglove.Log", log()),
-        (METRICS, "vpsom.Metrics", metrics()),
-        (STATS, "vpsom.RecorderStats", recorder_stats()),
+        def::<fg::RawImage>(DEPTH),
+        def::<fg::CameraCalibration>(CALIBRATION),
+        def::<own::DepthMeta>(DEPTH_META),
+        def::<fg::ImageAnnotations>(ANNOTATIONS),
+        def::<own::DetectionsRaw>(DETECTIONS),
+        def::<own::RobotStateRaw>(STATE),
+        def::<own::OccupancyGridRaw>(NAV_GRID),
+        def::<fg::FrameTransforms>(TF),
+        def::<fg::PosesInFrame>(TRAJECTORY),
+        def::<fg::FrameTransforms>(TRUTH_TF),
+        def::<fg::PosesInFrame>(TRUTH_TRAJECTORY),
+        def::<fg::SceneUpdate>(TRUTH_OBJECTS),
+        def::<fg::SceneUpdate>(MAP),
+        def::<own::MapMeta>(MAP_META),
+        def::<fg::SceneUpdate>(GBV),
+        def::<fg::SceneUpdate>(LBV),
+        def::<own::PlannerDecision>(DECISIONS),
+        def::<own::NavGoal>(NAV_GOAL),
+        def::<own::NeckGoal>(NECK_GOAL),
+        def::<own::DeadlineEvent>(DEADLINE),
+        def::<own::LatencySummary>(LATENCY),
+        def::<fg::Log>(LOG),
+        def::<own::Metrics>(METRICS),
+        def::<own::RecorderStats>(STATS),
     ]
 }
 
-/// An object schema whose listed properties are all required.
-fn object(title: &str, props: &[(&str, Value)]) -> Value {
-    let mut p = serde_json::Map::new();
-    for (k, v) in props {
-        p.insert((*k).to_string(), v.clone());
-    }
-    let req: Vec<&str> = props.iter().map(|(k, _)| *k).collect();
-    json!({"title": title, "type": "object", "properties": p, "required": req})
-}
-
-fn top(name: &str, description: &str, mut schema: Value) -> Value {
-    schema["$schema"] = json!("https://json-schema.org/draft/2020-12/schema");
-    schema["$comment"] = json!(format!("Generated by vpsom-rt for {name}"));
-    schema["description"] = json!(description);
-    schema
-}
-
-fn num() -> Value {
-    json!({"type": "number"})
-}
-fn int() -> Value {
-    json!({"type": "integer"})
-}
-fn uint() -> Value {
-    json!({"type": "integer", "minimum": 0})
-}
-fn string() -> Value {
-    json!({"type": "string"})
-}
-fn boolean() -> Value {
-    json!({"type": "boolean"})
-}
-fn array(items: Value) -> Value {
-    json!({"type": "array", "items": items})
-}
-fn bytes() -> Value {
-    json!({"type": "string", "contentEncoding": "base64"})
-}
-fn time() -> Value {
-    object(
-        "time",
-        &[
-            ("sec", uint()),
-            (
-                "nsec",
-                json!({"type": "integer", "minimum": 0, "maximum": 999_999_999}),
-            ),
-        ],
-    )
-}
-fn xyz(title: &str) -> Value {
-    object(title, &[("x", num()), ("y", num()), ("z", num())])
-}
-fn quaternion() -> Value {
-    object(
-        "foxglove.Quaternion",
-        &[("x", num()), ("y", num()), ("z", num()), ("w", num())],
-    )
-}
-fn pose() -> Value {
-    object(
-        "foxglove.Pose",
-        &[
-            ("position", xyz("foxglove.Vector3")),
-            ("orientation", quaternion()),
-        ],
-    )
-}
-fn color() -> Value {
-    let c = json!({"type": "number", "minimum": 0, "maximum": 1});
-    object(
-        "foxglove.Color",
-        &[
-            ("r", c.clone()),
-            ("g", c.clone()),
-            ("b", c.clone()),
-            ("a", c),
-        ],
-    )
-}
-
-/// `foxglove.RawImage`.
-pub fn raw_image() -> Value {
-    let s = object(
-        "foxglove.RawImage",
-        &[
-            ("timestamp", time()),
-            ("frame_id", string()),
-            ("width", uint()),
-            ("height", uint()),
-            ("encoding", string()),
-            ("step", uint()),
-            ("data", bytes()),
-        ],
-    );
-    top("foxglove.RawImage", "A raw image", s)
-}
-
-fn frame_transform() -> Value {
-    object(
-        "foxglove.FrameTransform",
-        &[
-            ("timestamp", time()),
-            ("parent_frame_id", string()),
-            ("child_frame_id", string()),
-            ("translation", xyz("foxglove.Vector3")),
-            ("rotation", quaternion()),
-        ],
-    )
-}
-
-/// `foxglove.FrameTransforms`.
-pub fn frame_transforms() -> Value {
-    let s = object(
-        "foxglove.FrameTransforms",
-        &[("transforms", array(frame_transform()))],
-    );
-    top(
-        "foxglove.FrameTransforms",
-        "An array of FrameTransform messages",
-        s,
-    )
-}
-
-/// `foxglove.PosesInFrame`.
-pub fn poses_in_frame() -> Value {
-    let s = object(
-        "foxglove.PosesInFrame",
-        &[
-            ("timestamp", time()),
-            ("frame_id", string()),
-            ("poses", array(pose())),
-        ],
-    );
-    top(
-        "foxglove.PosesInFrame",
-        "An array of timestamped poses for an object or reference frame in 3D space",
-        s,
-    )
-}
-
-fn key_value() -> Value {
-    object(
-        "foxglove.KeyValuePair",
-        &[("key", string()), ("value", string())],
-    )
-}
-
-fn scene_entity() -> Value {
-    let point = xyz("foxglove.Point3");
-    let sized = |title: &str| {
-        object(
-            title,
-            &[
-                ("pose", pose()),
-                ("size", xyz("foxglove.Vector3")),
-                ("color", color()),
-            ],
-        )
-    };
-    let arrow = object(
-        "foxglove.ArrowPrimitive",
-        &[
-            ("pose", pose()),
-            ("shaft_length", num()),
-            ("shaft_diameter", num()),
-            ("head_length", num()),
-            ("head_diameter", num()),
-            ("color", color()),
-        ],
-    );
-    let cylinder = object(
-        "foxglove.CylinderPrimitive",
-        &[
-            ("pose", pose()),
-            ("size", xyz("foxglove.Vector3")),
-            ("bottom_scale", num()),
-            ("top_scale", num()),
-            ("color", color()),
-        ],
-    );
-    let line = object(
-        "foxglove.LinePrimitive",
-        &[
-            // 0 LINE_STRIP, 1 LINE_LOOP, 2 LINE_LIST
-            ("type", json!({"type": "integer", "enum": [0, 1, 2]})),
-            ("pose", pose()),
-            ("thickness", json!({"type": "number", "minimum": 0})),
-            ("scale_invariant", boolean()),
-            ("points", array(point.clone())),
-            ("color", color()),
-            ("colors", array(color())),
-            ("indices", array(uint())),
-        ],
-    );
-    let triangles = object(
-        "foxglove.TriangleListPrimitive",
-        &[
-            ("pose", pose()),
-            ("points", array(point)),
-            ("color", color()),
-            ("colors", array(color())),
-            ("indices", array(uint())),
-        ],
-    );
-    let text = object(
-        "foxglove.TextPrimitive",
-        &[
-            ("pose", pose()),
-            ("billboard", boolean()),
-            ("font_size", json!({"type": "number", "minimum": 0})),
-            ("scale_invariant", boolean()),
-            ("color", color()),
-            ("text", string()),
-        ],
-    );
-    let model = object(
-        "foxglove.ModelPrimitive",
-        &[
-            ("pose", pose()),
-            ("scale", xyz("foxglove.Vector3")),
-            ("color", color()),
-            ("override_color", boolean()),
-            ("url", string()),
-            ("media_type", string()),
-            ("data", bytes()),
-        ],
-    );
-    object(
-        "foxglove.SceneEntity",
-        &[
-            ("timestamp", time()),
-            ("frame_id", string()),
-            ("id", string()),
-            ("lifetime", time()),
-            ("frame_locked", boolean()),
-            ("metadata", array(key_value())),
-            ("arrows", array(arrow)),
-            ("cubes", array(sized("foxglove.CubePrimitive"))),
-            ("spheres", array(sized("foxglove.SpherePrimitive"))),
-            ("cylinders", array(cylinder)),
-            ("lines", array(line)),
-            ("triangles", array(triangles)),
-            ("texts", array(text)),
-            ("models", array(model)),
-        ],
-    )
-}
-
-/// `foxglove.SceneUpdate`.
-pub fn scene_update() -> Value {
-    let deletion = object(
-        "foxglove.SceneEntityDeletion",
-        &[
-            ("timestamp", time()),
-            // 0 MATCHING_ID, 1 ALL
-            ("type", json!({"type": "integer", "enum": [0, 1]})),
-            ("id", string()),
-        ],
-    );
-    let s = object(
-        "foxglove.SceneUpdate",
-        &[
-            ("deletions", array(deletion)),
-            ("entities", array(scene_entity())),
-        ],
-    );
-    top(
-        "foxglove.SceneUpdate",
-        "An update to the entities displayed in a 3D scene",
-        s,
-    )
-}
-
-/// `foxglove.Log`.
-pub fn log() -> Value {
-    let s = object(
-        "foxglove.Log",
-        &[
-            ("timestamp", time()),
-            // 0 UNKNOWN, 1 DEBUG, 2 INFO, 3 WARNING, 4 ERROR, 5 FATAL
-            (
-                "level",
-                json!({"type": "integer", "enum": [0, 1, 2, 3, 4, 5]}),
-            ),
-            ("message", string()),
-            ("name", string()),
-            ("file", string()),
-            ("line", uint()),
-        ],
-    );
-    top("foxglove.Log", "A log message", s)
-}
-
-fn header_props() -> Vec<(&'static str, Value)> {
-    vec![
-        ("seq", uint()),
-        ("stamp_ns", uint()),
-        ("sim_time_ns", uint()),
-    ]
-}
-
-fn with_header(title: &str, description: &str, props: &[(&str, Value)]) -> Value {
-    let mut all = header_props();
-    all.extend(props.iter().map(|(k, v)| (*k, v.clone())));
-    top(title, description, object(title, &all))
-}
-
-/// `vpsom.PlannerDecision`: a GBV round or LBV cycle with every F(v) term per candidate.
-pub fn planner_decision() -> Value {
-    let candidate = object(
-        "vpsom.Candidate",
-        &[
-            (
-                "position",
-                json!({"type": "array", "items": num(), "minItems": 3, "maxItems": 3}),
-            ),
-            ("yaw", num()),
-            ("pitch", num()),
-            ("value", num()),
-            ("f_a", num()),
-            ("f_c", num()),
-            ("h_sopm", num()),
-            ("h_iou", num()),
-            ("cos_theta_sopm", num()),
-            ("c_asso", num()),
-            ("n_cp", num()),
-            ("cos_theta_c", num()),
-            ("objects_in_view", uint()),
-            ("chosen", boolean()),
-            ("dropped", boolean()),
-        ],
-    );
-    with_header(
-        "vpsom.PlannerDecision",
-        "Evaluated candidates of one planner decision (paper eqs. 1-4, 12, 21-23)",
-        &[
-            ("kind", json!({"type": "string", "enum": ["gbv", "lbv"]})),
-            (
-                "state",
-                json!({"type": "string", "enum": ["running", "terminated", "no_candidates"]}),
-            ),
-            ("map_seq", uint()),
-            ("eval_ns", uint()),
-            ("cluster_id", int()),
-            ("evaluated", uint()),
-            ("chosen_value", num()),
-            ("candidates", array(candidate)),
-        ],
-    )
-}
-
-/// `vpsom.NavGoal`.
-pub fn nav_goal() -> Value {
-    with_header(
-        "vpsom.NavGoal",
-        "A chassis goal",
-        &[
-            ("goal_id", uint()),
-            ("x", num()),
-            ("y", num()),
-            ("yaw", num()),
-            ("score", num()),
-            ("cluster_id", int()),
-            (
-                "kind",
-                json!({"type": "string", "enum": ["gbv", "coverage", "frontier"]}),
-            ),
-        ],
-    )
-}
-
-/// `vpsom.NeckGoal`.
-pub fn neck_goal() -> Value {
-    with_header(
-        "vpsom.NeckGoal",
-        "A neck goal relative to the base",
-        &[
-            ("map_seq", uint()),
-            ("frame_stamp_ns", uint()),
-            ("yaw", num()),
-            ("pitch", num()),
-            ("score", num()),
-        ],
-    )
-}
-
-/// `vpsom.DeadlineEvent`.
-pub fn deadline_event() -> Value {
-    with_header(
-        "vpsom.DeadlineEvent",
-        "One cycle of a periodic thread as seen by its deadline monitor",
-        &[
-            ("thread", string()),
-            ("cycle", uint()),
-            ("period_ns", uint()),
-            ("budget_ns", uint()),
-            ("lateness_ns", int()),
-            ("exec_ns", uint()),
-            ("cpu_ns", uint()),
-            ("run_wait_ns", uint()),
-            ("sched_stats", boolean()),
-            ("backup_wake", boolean()),
-            ("consecutive_misses", uint()),
-            ("miss", boolean()),
-            ("miss_cause", string()),
-        ],
-    )
-}
-
-/// `vpsom.LatencySummary`.
-pub fn latency_summary() -> Value {
-    let node = object(
-        "vpsom.NodeLatency",
-        &[
-            ("node", string()),
-            ("count", uint()),
-            ("min_ns", uint()),
-            ("p50_ns", uint()),
-            ("p90_ns", uint()),
-            ("p99_ns", uint()),
-            ("max_ns", uint()),
-            ("mean_ns", num()),
-        ],
-    );
-    top(
-        "vpsom.LatencySummary",
-        "Per-node latency histograms summarised over one period",
-        object(
-            "vpsom.LatencySummary",
-            &[
-                ("time_ns", uint()),
-                ("period_ns", uint()),
-                ("nodes", array(node)),
-            ],
-        ),
-    )
-}
-
-/// `vpsom.Metrics`: the `metrics.json` object (more keys may be present).
-pub fn metrics() -> Value {
-    let nullable_num = json!({"type": ["number", "null"]});
-    top(
-        "vpsom.Metrics",
-        "Final metrics of a run (same keys as metrics.json)",
-        object(
-            "vpsom.Metrics",
-            &[
-                ("scene", string()),
-                ("planner", string()),
-                ("seed", uint()),
-                ("terminated", boolean()),
-                ("objects_gt", uint()),
-                ("objects_estimated", uint()),
-                ("precision", nullable_num.clone()),
-                ("recall", nullable_num.clone()),
-                ("iou", nullable_num.clone()),
-                ("cde_m", nullable_num.clone()),
-                ("path_length_m", num()),
-                ("time_s", num()),
-                ("non_occlusion", nullable_num),
-                ("localization_failures", uint()),
-                ("deadline_misses", uint()),
-            ],
-        ),
-    )
-}
-
-/// `vpsom.RecorderStats`.
-pub fn recorder_stats() -> Value {
-    let counts =
-        json!({"type": "object", "additionalProperties": {"type": "integer", "minimum": 0}});
-    top(
-        "vpsom.RecorderStats",
-        "Recorder counters: inputs offered and dropped per primary topic, messages written per topic",
-        object(
-            "vpsom.RecorderStats",
-            &[
-                ("offered", counts.clone()),
-                ("dropped", counts.clone()),
-                ("written", counts),
-                ("dropped_total", uint()),
-                ("final", boolean()),
-            ],
-        ),
-    )
+/// True for the channels whose type is a Foxglove well-known schema (`foxglove.*`).
+pub fn is_foxglove(c: &ChannelDef) -> bool {
+    c.schema.name.starts_with("foxglove.")
 }

@@ -1,14 +1,17 @@
-//! The writer thread: owns the `mcap::Writer`, converts messages, bounds chunk age, writes stats.
+//! The writer thread: owns the `mcap::Writer`, converts and encodes messages, applies the
+//! profile's rate limits, bounds chunk age, writes stats, feeds the live view.
 
 use super::convert;
+use super::live::LiveView;
+use super::messages::{RecorderStats, TopicCounts};
 use super::schemas::{self, SESSION_METADATA, STATS_METADATA, topic};
 use super::{
     Compression, DropCounts, MountGeometry, Msg, RecorderConfig, RecorderError, RecorderSetup,
     RecorderSummary, Shared,
 };
 use crossbeam::channel::{Receiver, TryRecvError};
+use foxglove::Encode;
 use mcap::records::{MessageHeader, Metadata};
-use serde::Serialize;
 use shm_types::{DepthFrame, RobotState, decision_kind};
 use std::collections::{BTreeMap, HashMap};
 use std::fs::File;
@@ -24,6 +27,29 @@ struct Chan {
     id: u16,
     seq: u32,
     written: u64,
+    throttled: u64,
+    /// Least simulated time between two messages, ns (`None`: no limit; `u64::MAX`: none kept).
+    min_period_ns: Option<u64>,
+    last_ns: Option<u64>,
+}
+
+impl Chan {
+    /// Whether a message at `t` passes the rate limit (counted if not).
+    fn admit(&mut self, t: u64) -> bool {
+        let Some(p) = self.min_period_ns else {
+            return true;
+        };
+        let ok = p != u64::MAX
+            && self
+                .last_ns
+                .is_none_or(|l| t >= l.saturating_add(p) || t < l);
+        if ok {
+            self.last_ns = Some(t);
+        } else {
+            self.throttled += 1;
+        }
+        ok
+    }
 }
 
 /// A base trajectory being accumulated.
@@ -72,7 +98,10 @@ pub(super) struct WriterState {
     mount: MountGeometry,
     cfg: RecorderConfig,
     out: Vec<u8>,
-    scratch: Vec<u8>,
+    decimation: u32,
+    live: Option<LiveView>,
+    /// Messages the live view gets again every stats interval (written once: truth, grid).
+    live_static: Vec<(usize, u64, Vec<u8>)>,
     chunk_open_since: Option<Instant>,
     last_stats: Instant,
     last_log_ns: u64,
@@ -86,16 +115,6 @@ impl std::fmt::Debug for WriterState {
             .field("path", &self.path)
             .finish_non_exhaustive()
     }
-}
-
-#[derive(Debug, Serialize)]
-struct StatsJson<'a> {
-    offered: &'a BTreeMap<String, u64>,
-    dropped: &'a BTreeMap<String, u64>,
-    written: BTreeMap<&'static str, u64>,
-    dropped_total: u64,
-    #[serde(rename = "final")]
-    last: bool,
 }
 
 /// CPU time of the calling thread, ns, from `/proc/thread-self/schedstat` (0 if unavailable).
@@ -139,22 +158,43 @@ impl WriterState {
             .map_err(mcap_err)?;
         let mut chans = Vec::new();
         let mut index = HashMap::new();
-        for (t, name, schema) in schemas::channels() {
-            let data = serde_json::to_vec(&schema).unwrap_or_default();
-            let sid = mcap
-                .add_schema(name, "jsonschema", &data)
-                .map_err(mcap_err)?;
+        let defs = schemas::channels();
+        let mut schema_ids: HashMap<String, u16> = HashMap::new();
+        for d in &defs {
+            let sid = match schema_ids.get(&d.schema.name) {
+                Some(&sid) => sid,
+                None => {
+                    let sid = mcap
+                        .add_schema(&d.schema.name, &d.schema.encoding, &d.schema.data)
+                        .map_err(mcap_err)?;
+                    schema_ids.insert(d.schema.name.clone(), sid);
+                    sid
+                }
+            };
             let id = mcap
-                .add_channel(sid, t, "json", &BTreeMap::new())
+                .add_channel(sid, d.topic, &d.encoding, &BTreeMap::new())
                 .map_err(mcap_err)?;
-            index.insert(t, chans.len());
+            index.insert(d.topic, chans.len());
             chans.push(Chan {
-                topic: t,
+                topic: d.topic,
                 id,
                 seq: 0,
                 written: 0,
+                throttled: 0,
+                min_period_ns: cfg.max_hz(d.topic).map(|hz| {
+                    if hz > 0.0 {
+                        (1e9 / hz).round() as u64
+                    } else {
+                        u64::MAX
+                    }
+                }),
+                last_ns: None,
             });
         }
+        let live = match setup.live_port {
+            Some(port) => Some(LiveView::start(port, &defs)?),
+            None => None,
+        };
         let m = setup.mount;
         let session = Metadata {
             name: SESSION_METADATA.into(),
@@ -167,9 +207,10 @@ impl WriterState {
                 ),
                 ("hfov_deg".to_string(), m.hfov_deg.to_string()),
                 ("vfov_deg".to_string(), m.vfov_deg.to_string()),
+                ("profile".to_string(), cfg.profile.name().to_string()),
                 (
                     "depth_decimation".to_string(),
-                    cfg.depth_decimation.to_string(),
+                    cfg.depth_decimation().to_string(),
                 ),
                 ("truth_objects".to_string(), setup.truth.len().to_string()),
             ]),
@@ -183,7 +224,9 @@ impl WriterState {
             mount: setup.mount,
             cfg: cfg.clone(),
             out: Vec::with_capacity(1 << 16),
-            scratch: Vec::new(),
+            decimation: cfg.depth_decimation(),
+            live,
+            live_static: Vec::new(),
             chunk_open_since: None,
             last_stats: Instant::now(),
             last_log_ns: 0,
@@ -191,10 +234,10 @@ impl WriterState {
             truth_traj: Trajectory::default(),
         };
         if !setup.truth.is_empty() {
-            let mut out = std::mem::take(&mut w.out);
-            convert::truth_objects(&setup.truth, &mut out);
-            w.write(topic::TRUTH_OBJECTS, 0, 0, &out)?;
-            w.out = out;
+            w.emit(topic::TRUTH_OBJECTS, 0, 0, || {
+                convert::truth_objects(&setup.truth)
+            })?;
+            w.keep_for_live(topic::TRUTH_OBJECTS, 0);
         }
         Ok(w)
     }
@@ -206,16 +249,30 @@ impl WriterState {
         }
     }
 
-    fn write(
+    /// The live view's port, if one is served.
+    pub(super) fn live_port(&self) -> Option<u16> {
+        self.live.as_ref().map(LiveView::port)
+    }
+
+    /// If `topic`'s rate limit admits a message at `log_ns`, build it with `f`, encode it, write
+    /// it and publish it live.
+    fn emit<T: Encode>(
         &mut self,
         topic: &'static str,
         log_ns: u64,
         publish_ns: u64,
-        data: &[u8],
+        f: impl FnOnce() -> T,
     ) -> Result<(), RecorderError> {
         let Some(&i) = self.index.get(topic) else {
             return Ok(());
         };
+        if !self.chans[i].admit(log_ns) {
+            return Ok(());
+        }
+        let msg = f();
+        self.out.clear();
+        // Encoding into a growable Vec cannot run out of room.
+        let _ = msg.encode(&mut self.out);
         let c = &mut self.chans[i];
         c.seq = c.seq.wrapping_add(1);
         c.written += 1;
@@ -226,26 +283,24 @@ impl WriterState {
             publish_time: publish_ns,
         };
         self.last_log_ns = self.last_log_ns.max(log_ns);
-        if let Err(e) = self.mcap.write_to_known_channel(&header, data) {
+        if let Err(e) = self.mcap.write_to_known_channel(&header, &self.out) {
             return Err(self.err(e));
         }
         self.chunk_open_since.get_or_insert_with(Instant::now);
+        if let Some(l) = &self.live {
+            l.publish(i, log_ns, &self.out);
+        }
         Ok(())
     }
 
-    /// Convert `msg` with `f` into the reusable buffer and write it.
-    fn emit(
-        &mut self,
-        topic: &'static str,
-        log_ns: u64,
-        publish_ns: u64,
-        f: impl FnOnce(&mut Vec<u8>),
-    ) -> Result<(), RecorderError> {
-        let mut out = std::mem::take(&mut self.out);
-        f(&mut out);
-        let r = self.write(topic, log_ns, publish_ns, &out);
-        self.out = out;
-        r
+    /// Remember the message just emitted on `topic` to publish it live again later.
+    fn keep_for_live(&mut self, topic: &'static str, log_ns: u64) {
+        if self.live.is_some()
+            && let Some(&i) = self.index.get(topic)
+        {
+            self.live_static.retain(|(j, _, _)| *j != i);
+            self.live_static.push((i, log_ns, self.out.clone()));
+        }
     }
 
     fn handle(&mut self, m: Msg, shared: &Shared) -> Result<(), RecorderError> {
@@ -255,37 +310,34 @@ impl WriterState {
             Msg::State(s) | Msg::TrueState(s) => {
                 let truth = matches!(m, Msg::TrueState(_));
                 let (t, p) = (s.header.sim_time_ns, s.header.stamp_ns);
-                let tf_topic = if truth { topic::TRUTH_TF } else { topic::TF };
-                self.emit(tf_topic, t, p, |o| {
-                    convert::transforms(&s, &mount, truth, o)
-                })?;
-                let period = (1e9 / self.cfg.trajectory_hz) as u64;
-                let max = self.cfg.trajectory_max_poses;
-                let tr = if truth {
-                    &mut self.truth_traj
-                } else {
-                    &mut self.traj
-                };
-                if tr.add(&s, period, max) {
-                    let poses = std::mem::take(&mut tr.poses);
-                    let traj_topic = if truth {
-                        topic::TRUTH_TRAJECTORY
-                    } else {
-                        topic::TRAJECTORY
-                    };
-                    let r = self.emit(traj_topic, t, p, |o| convert::trajectory(t, &poses, o));
-                    if truth {
-                        self.truth_traj.poses = poses;
-                    } else {
-                        self.traj.poses = poses;
-                    }
-                    r?;
+                if !truth {
+                    self.emit(topic::STATE, t, p, || convert::state_raw(&s))?;
                 }
+                let tf_topic = if truth { topic::TRUTH_TF } else { topic::TF };
+                self.emit(tf_topic, t, p, || convert::transforms(&s, &mount, truth))?;
+                self.trajectory(&s, truth)?;
+            }
+            Msg::Detections(b) => {
+                let (t, p) = (b.header.sim_time_ns, b.header.stamp_ns);
+                let k = self.decimation;
+                let r = self
+                    .emit(topic::DETECTIONS, t, p, || convert::detections_raw(&b))
+                    .and_then(|()| {
+                        self.emit(topic::ANNOTATIONS, t, p, || convert::annotations(&b, t, k))
+                    });
+                shared.detections_pool.give(b);
+                r?;
+            }
+            Msg::NavGrid(g) => {
+                let (t, p) = (g.header.sim_time_ns, g.header.stamp_ns);
+                self.emit(topic::NAV_GRID, t, p, || convert::grid_raw(&g))?;
+                self.keep_for_live(topic::NAV_GRID, t);
             }
             Msg::Map(b) => {
-                let r = self.emit(topic::MAP, b.header.sim_time_ns, b.header.stamp_ns, |o| {
-                    convert::map_objects(&b, o)
-                });
+                let (t, p) = (b.header.sim_time_ns, b.header.stamp_ns);
+                let r = self
+                    .emit(topic::MAP, t, p, || convert::map_objects(&b))
+                    .and_then(|()| self.emit(topic::MAP_META, t, p, || convert::map_meta(&b)));
                 shared.map_pool.give(b);
                 r?;
             }
@@ -298,26 +350,26 @@ impl WriterState {
                     topic::LBV
                 };
                 let r = self
-                    .emit(topic::DECISIONS, t, p, |o| convert::decision(&b, o))
-                    .and_then(|()| self.emit(scene, t, p, |o| convert::frusta(&b, &mount, len, o)));
+                    .emit(topic::DECISIONS, t, p, || convert::decision(&b))
+                    .and_then(|()| self.emit(scene, t, p, || convert::frusta(&b, &mount, len)));
                 shared.decision_pool.give(b);
                 r?;
             }
             Msg::NavGoal(g) => {
                 let (t, p) = (g.header.sim_time_ns, g.header.stamp_ns);
-                self.emit(topic::NAV_GOAL, t, p, |o| convert::nav_goal(&g, o))?;
+                self.emit(topic::NAV_GOAL, t, p, || convert::nav_goal(&g))?;
             }
             Msg::NeckGoal(g) => {
                 let (t, p) = (g.header.sim_time_ns, g.header.stamp_ns);
-                self.emit(topic::NECK_GOAL, t, p, |o| convert::neck_goal(&g, o))?;
+                self.emit(topic::NECK_GOAL, t, p, || convert::neck_goal(&g))?;
             }
             Msg::Deadline(e) => {
                 let (t, p) = (e.header.sim_time_ns, e.header.stamp_ns);
-                self.emit(topic::DEADLINE, t, p, |o| convert::deadline(&e, o))?;
+                self.emit(topic::DEADLINE, t, p, || convert::deadline(&e))?;
             }
             Msg::Latency(s) => {
-                self.emit(topic::LATENCY, s.time_ns, s.time_ns, |o| {
-                    convert::latency(&s, o)
+                self.emit(topic::LATENCY, s.time_ns, s.time_ns, || {
+                    convert::latency(&s)
                 })?;
             }
             Msg::Log {
@@ -326,46 +378,84 @@ impl WriterState {
                 name,
                 text,
             } => {
-                self.emit(topic::LOG, time_ns, time_ns, |o| {
-                    convert::log(time_ns, level, &name, &text, o)
+                self.emit(topic::LOG, time_ns, time_ns, || {
+                    convert::log(time_ns, level, &name, &text)
                 })?;
             }
             Msg::Metrics { time_ns, value } => {
-                self.emit(topic::METRICS, time_ns, time_ns, |o| {
-                    convert::value(&value, o)
+                self.emit(topic::METRICS, time_ns, time_ns, || {
+                    convert::metrics(&value)
                 })?;
             }
         }
         Ok(())
     }
 
-    fn depth(&mut self, f: &DepthFrame) -> Result<(), RecorderError> {
-        let mut scratch = std::mem::take(&mut self.scratch);
-        let k = self.cfg.depth_decimation;
-        let r = self.emit(topic::DEPTH, f.header.sim_time_ns, f.header.stamp_ns, |o| {
-            convert::depth_image(f, k, &mut scratch, o)
-        });
-        self.scratch = scratch;
+    /// Add a state to its trajectory and write the trajectory when due.
+    fn trajectory(&mut self, s: &RobotState, truth: bool) -> Result<(), RecorderError> {
+        let (t, p) = (s.header.sim_time_ns, s.header.stamp_ns);
+        let period = (1e9 / self.cfg.trajectory_hz) as u64;
+        let max = self.cfg.trajectory_max_poses;
+        let (tr, traj_topic) = if truth {
+            (&mut self.truth_traj, topic::TRUTH_TRAJECTORY)
+        } else {
+            (&mut self.traj, topic::TRAJECTORY)
+        };
+        if !tr.add(s, period, max) {
+            return Ok(());
+        }
+        let poses = std::mem::take(&mut tr.poses);
+        let r = self.emit(traj_topic, t, p, || convert::trajectory(t, &poses));
+        if truth {
+            self.truth_traj.poses = poses;
+        } else {
+            self.traj.poses = poses;
+        }
         r
+    }
+
+    fn depth(&mut self, f: &DepthFrame) -> Result<(), RecorderError> {
+        let k = self.decimation;
+        let (t, p) = (f.header.sim_time_ns, f.header.stamp_ns);
+        self.emit(topic::DEPTH, t, p, || convert::depth_image(f, k))?;
+        self.emit(topic::DEPTH_META, t, p, || convert::depth_meta(f, k))?;
+        self.emit(topic::CALIBRATION, t, p, || convert::calibration(f, k))
     }
 
     fn written(&self) -> BTreeMap<&'static str, u64> {
         self.chans.iter().map(|c| (c.topic, c.written)).collect()
     }
 
+    fn throttled(&self) -> BTreeMap<String, u64> {
+        self.chans
+            .iter()
+            .filter(|c| c.min_period_ns.is_some())
+            .map(|c| (c.topic.to_string(), c.throttled))
+            .collect()
+    }
+
     fn stats(&mut self, drops: &DropCounts, last: bool) -> Result<(), RecorderError> {
-        let msg = StatsJson {
-            offered: &drops.offered,
-            dropped: &drops.dropped,
-            written: self.written(),
+        let topics = self
+            .chans
+            .iter()
+            .map(|c| TopicCounts {
+                topic: c.topic.to_string(),
+                offered: drops.offered.get(c.topic).copied().unwrap_or(0),
+                dropped: drops.dropped.get(c.topic).copied().unwrap_or(0),
+                throttled: c.throttled,
+                // The stats message being written counts itself.
+                written: c.written + u64::from(c.topic == topic::STATS),
+            })
+            .collect();
+        let msg = RecorderStats {
+            profile: self.cfg.profile.name().to_string(),
+            topics,
             dropped_total: drops.total_dropped(),
+            throttled_total: self.chans.iter().map(|c| c.throttled).sum(),
             last,
         };
         let t = self.last_log_ns;
-        self.emit(topic::STATS, t, t, |o| {
-            o.clear();
-            let _ = serde_json::to_writer(o, &msg);
-        })
+        self.emit(topic::STATS, t, t, || msg)
     }
 
     /// Flush a chunk that is older than the interval; write stats when due.
@@ -374,6 +464,11 @@ impl WriterState {
         if self.last_stats.elapsed().as_secs_f64() >= self.cfg.stats_interval_s {
             self.last_stats = now;
             self.stats(&shared.drop_counts(), false)?;
+            if let Some(l) = &self.live {
+                for (i, t, data) in &self.live_static {
+                    l.publish(*i, *t, data);
+                }
+            }
         }
         if let Some(since) = self.chunk_open_since
             && now.duration_since(since).as_secs_f64() >= self.cfg.flush_interval_s
@@ -447,8 +542,9 @@ impl WriterState {
             shared.depth_pool.give(f);
             r?;
         }
-        let drops = shared.drop_counts();
+        let mut drops = shared.drop_counts();
         self.stats(&drops, true)?;
+        drops.throttled = self.throttled();
         let mut meta = BTreeMap::new();
         for (t, n) in &drops.offered {
             meta.insert(format!("offered:{t}"), n.to_string());
@@ -456,10 +552,18 @@ impl WriterState {
         for (t, n) in &drops.dropped {
             meta.insert(format!("dropped:{t}"), n.to_string());
         }
+        for (t, n) in &drops.throttled {
+            meta.insert(format!("throttled:{t}"), n.to_string());
+        }
         for (t, n) in self.written() {
             meta.insert(format!("written:{t}"), n.to_string());
         }
         meta.insert("dropped_total".into(), drops.total_dropped().to_string());
+        meta.insert(
+            "throttled_total".into(),
+            drops.total_throttled().to_string(),
+        );
+        meta.insert("profile".into(), self.cfg.profile.name().into());
         let md = Metadata {
             name: STATS_METADATA.into(),
             metadata: meta,
@@ -477,6 +581,8 @@ impl WriterState {
             .collect();
         let cpu = thread_cpu_ns();
         let path = self.path.clone();
+        // Stop serving before the file is closed: viewers see the run end with the file.
+        drop(self.live.take());
         let mut file = self.mcap.into_inner();
         file.flush()
             .and_then(|()| file.get_ref().sync_all())

@@ -1,8 +1,9 @@
-//! Shared helpers of the recorder tests: message builders, a reader of every message with its
-//! schema, and a small JSON Schema validator for the keywords our schemas use.
+//! Shared helpers of the recorder tests: message builders and a reader of every message,
+//! decoded through the protobuf schema stored in the file.
 
 #![allow(dead_code)]
 
+use runtime::recorder::decode::MessageType;
 use runtime::recorder::inspect::{Item, ScanEnd, scan};
 use serde_json::Value;
 use shm_types::*;
@@ -103,20 +104,52 @@ pub fn deadline(seq: u64) -> DeadlineEvent {
     e
 }
 
+pub fn detections(seq: u64, n: usize) -> Box<Detections> {
+    let mut d = boxed_zeroed::<Detections>();
+    d.header = header(seq);
+    d.frame_seq = seq;
+    d.width = 64;
+    d.height = 48;
+    d.count = n as u32;
+    for (k, x) in d.items[..n].iter_mut().enumerate() {
+        x.class_id = 56 + k as u16;
+        x.label = k as u16 + 1;
+        x.score = 0.5 + 0.1 * k as f32;
+        x.bbox = [2 * k as u16, 4, 2 * k as u16 + 10, 20];
+    }
+    d
+}
+
+pub fn grid(seq: u64) -> Box<OccupancyGrid> {
+    let mut g = boxed_zeroed::<OccupancyGrid>();
+    g.header = header(seq);
+    g.origin = [-3.0, -2.5];
+    g.resolution = 0.05;
+    g.width = 20;
+    g.height = 10;
+    for (i, c) in g.cells[..200].iter_mut().enumerate() {
+        *c = (i % 3) as u8 * 100;
+    }
+    g
+}
+
 /// One message read back.
 #[derive(Debug, Clone)]
 pub struct ReadMessage {
     pub topic: String,
     pub schema_name: String,
-    pub schema: Value,
     pub log_time: u64,
+    /// The message in the protobuf JSON mapping (proto field names, defaults included).
     pub value: Value,
+    /// The encoded message.
+    pub data: Vec<u8>,
 }
 
-/// Every message of a file with its channel's schema (JSON only), and how the scan ended.
+/// Every message of a file decoded through its channel's schema, and how the scan ended. Panics
+/// on a channel that is not protobuf or a message its schema does not decode.
 pub fn read_all(path: &Path) -> (Vec<ReadMessage>, ScanEnd) {
-    let mut schemas: HashMap<u16, (String, Value)> = HashMap::new();
-    let mut chans: HashMap<u16, (String, String, Value)> = HashMap::new();
+    let mut schemas: HashMap<u16, (String, MessageType)> = HashMap::new();
+    let mut chans: HashMap<u16, (String, String, MessageType)> = HashMap::new();
     let mut out = Vec::new();
     let end = scan(path, |item| match item {
         Item::Schema {
@@ -125,9 +158,9 @@ pub fn read_all(path: &Path) -> (Vec<ReadMessage>, ScanEnd) {
             encoding,
             data,
         } => {
-            assert_eq!(encoding, "jsonschema", "{name}");
-            let v: Value = serde_json::from_slice(data).expect("schema is JSON");
-            schemas.insert(id, (name.to_string(), v));
+            let t = MessageType::from_schema(name, encoding, data)
+                .unwrap_or_else(|e| panic!("{name}: {e}"));
+            schemas.insert(id, (name.to_string(), t));
         }
         Item::Channel {
             id,
@@ -136,36 +169,42 @@ pub fn read_all(path: &Path) -> (Vec<ReadMessage>, ScanEnd) {
             schema_id,
             ..
         } => {
-            assert_eq!(encoding, "json", "{topic}");
-            let (n, s) = schemas
+            assert_eq!(encoding, "protobuf", "{topic}");
+            let (n, t) = schemas
                 .get(&schema_id)
                 .cloned()
                 .expect("schema before channel");
-            chans.insert(id, (topic.to_string(), n, s));
+            chans.insert(id, (topic.to_string(), n, t));
         }
         Item::Message {
             channel,
             log_time,
             data,
         } => {
-            let (t, n, s) = chans
-                .get(&channel)
-                .cloned()
-                .expect("channel before message");
-            let value = serde_json::from_slice(data)
-                .unwrap_or_else(|e| panic!("{t}: message is not JSON: {e}"));
+            let (topic, n, t) = chans.get(&channel).expect("channel before message");
+            let value = t.to_json(data).unwrap_or_else(|e| panic!("{topic}: {e}"));
             out.push(ReadMessage {
-                topic: t,
-                schema_name: n,
-                schema: s,
+                topic: topic.clone(),
+                schema_name: n.clone(),
                 log_time,
                 value,
+                data: data.to_vec(),
             });
         }
         Item::Metadata { .. } => {}
     })
     .expect("scan");
     (out, end)
+}
+
+/// The entry of `topic` in a `/recorder/stats` message.
+pub fn stats_of<'a>(stats: &'a Value, topic: &str) -> &'a Value {
+    stats["topics"]
+        .as_array()
+        .expect("topics")
+        .iter()
+        .find(|t| t["topic"] == topic)
+        .unwrap_or_else(|| panic!("no {topic} in {stats}"))
 }
 
 pub fn counts(msgs: &[ReadMessage]) -> BTreeMap<String, u64> {
@@ -176,92 +215,13 @@ pub fn counts(msgs: &[ReadMessage]) -> BTreeMap<String, u64> {
     c
 }
 
-/// Validate `v` against `schema` (keywords: type, properties, required, items, enum, minimum,
-/// maximum, minItems, maxItems, additionalProperties). Returns the first violation.
-pub fn validate(schema: &Value, v: &Value, at: &str) -> Result<(), String> {
-    let err = |m: String| Err(format!("{at}: {m}"));
-    if let Some(t) = schema.get("type") {
-        let types: Vec<&str> = match t {
-            Value::String(s) => vec![s.as_str()],
-            Value::Array(a) => a.iter().filter_map(Value::as_str).collect(),
-            _ => return err("bad type keyword".into()),
-        };
-        let ok = types.iter().any(|t| match *t {
-            "object" => v.is_object(),
-            "array" => v.is_array(),
-            "string" => v.is_string(),
-            "integer" => v.is_i64() || v.is_u64(),
-            "number" => v.is_number(),
-            "boolean" => v.is_boolean(),
-            "null" => v.is_null(),
-            _ => false,
-        });
-        if !ok {
-            return err(format!("{v} is not of type {t}"));
-        }
-    }
-    if let Some(Value::Array(e)) = schema.get("enum")
-        && !e.contains(v)
-    {
-        return err(format!("{v} not in {e:?}"));
-    }
-    if let (Some(lo), Some(x)) = (schema.get("minimum").and_then(Value::as_f64), v.as_f64())
-        && x < lo
-    {
-        return err(format!("{x} < minimum {lo}"));
-    }
-    if let (Some(hi), Some(x)) = (schema.get("maximum").and_then(Value::as_f64), v.as_f64())
-        && x > hi
-    {
-        return err(format!("{x} > maximum {hi}"));
-    }
-    if let Some(obj) = v.as_object() {
-        if let Some(Value::Array(req)) = schema.get("required") {
-            for r in req.iter().filter_map(Value::as_str) {
-                if !obj.contains_key(r) {
-                    return err(format!("missing required {r}"));
-                }
-            }
-        }
-        let props = schema.get("properties").and_then(Value::as_object);
-        for (k, x) in obj {
-            match props.and_then(|p| p.get(k)) {
-                Some(s) => validate(s, x, &format!("{at}.{k}"))?,
-                None => match schema.get("additionalProperties") {
-                    Some(Value::Bool(false)) => return err(format!("unexpected property {k}")),
-                    Some(s @ Value::Object(_)) => validate(s, x, &format!("{at}.{k}"))?,
-                    _ => {}
-                },
-            }
-        }
-    }
-    if let Some(arr) = v.as_array() {
-        if let Some(n) = schema.get("minItems").and_then(Value::as_u64)
-            && (arr.len() as u64) < n
-        {
-            return err(format!("fewer than {n} items"));
-        }
-        if let Some(n) = schema.get("maxItems").and_then(Value::as_u64)
-            && (arr.len() as u64) > n
-        {
-            return err(format!("more than {n} items"));
-        }
-        if let Some(s) = schema.get("items") {
-            for (i, x) in arr.iter().enumerate() {
-                validate(s, x, &format!("{at}[{i}]"))?;
-            }
-        }
-    }
-    Ok(())
-}
-
 /// Run `runtime/tests/py/check_mcap.py` on `path` with the python in `VPSOM_PYTHON`, expecting
 /// `expect` messages per topic. Only the `#[ignore]`d Python tests call it (`.ci/run` runs them
 /// with `--ignored` after making a venv); without `VPSOM_PYTHON` it fails, never skips.
 pub fn python_check(path: &Path, expect: &BTreeMap<String, u64>) {
     let py = std::env::var_os("VPSOM_PYTHON").expect(
-        "precondition: VPSOM_PYTHON must name a python with the `mcap` and `jsonschema` \
-         packages (.ci/run makes target/ci-venv)",
+        "precondition: VPSOM_PYTHON must name a python with the `mcap` and \
+         `mcap-protobuf-support` packages (.ci/run makes target/ci-venv)",
     );
     let script = Path::new(env!("CARGO_MANIFEST_DIR")).join("tests/py/check_mcap.py");
     let mut cmd = std::process::Command::new(py);

@@ -48,6 +48,8 @@ pub struct RunArgs {
     pub gbv_load: usize,
     /// The roles the launcher starts, in launch order (see [`external::parse_nodes`]).
     pub nodes: Vec<&'static str>,
+    /// The recorder serves the live view (Foxglove WebSocket) on this port.
+    pub live: Option<u16>,
 }
 
 impl RunArgs {
@@ -75,6 +77,10 @@ impl RunArgs {
         if let Some(c) = &self.config_file {
             a.push("--config".into());
             a.push(c.display().to_string());
+        }
+        if let (Some(p), "recorder") = (self.live, role) {
+            a.push("--live".into());
+            a.push(p.to_string());
         }
         a
     }

@@ -9,7 +9,8 @@ use crate::sim::Scene;
 use runtime::ports::{PortContext, Subscriber};
 use runtime::recorder::{MountGeometry, Recorder, RecorderHandle, RecorderSetup, TruthBox};
 use shm_types::{
-    DeadlineEvent, DepthFrame, NavGoal, NeckGoal, ObjectMap, PlannerDecision, RobotState,
+    DeadlineEvent, DepthFrame, Detections, NavGoal, NeckGoal, ObjectMap, OccupancyGrid,
+    PlannerDecision, RobotState,
 };
 use std::sync::atomic::AtomicBool;
 use std::time::Duration;
@@ -43,6 +44,7 @@ pub fn recorder_setup(scene: &Scene, cfg: &Config) -> RecorderSetup {
                 yaw: o.yaw,
             })
             .collect(),
+        live_port: None,
     }
 }
 
@@ -60,6 +62,8 @@ struct RecorderHost {
     rec: Recorder,
     h: RecorderHandle,
     depth: Subscriber<DepthFrame>,
+    detections: Subscriber<Detections>,
+    grid: Subscriber<OccupancyGrid>,
     state: Subscriber<RobotState>,
     truth: Subscriber<RobotState>,
     map: Subscriber<ObjectMap>,
@@ -79,18 +83,28 @@ impl RecorderHost {
                 scene: "none".into(),
                 mount: mount(cfg),
                 truth: Vec::new(),
+                live_port: None,
             },
+        };
+        let setup = RecorderSetup {
+            live_port: args.live,
+            ..setup
         };
         std::fs::create_dir_all(&args.out)?;
         // Restarted within a run: continue in the next segment; the torn one is recovered in
         // the background (the launcher removed an earlier run's segments at start).
         let rec = Recorder::resume(&args.out.join("trace.mcap"), &cfg.recorder, setup)?;
         let h = rec.handle();
+        if let Some(p) = rec.live_port() {
+            eprintln!("recorder: live view on ws://0.0.0.0:{p} (Foxglove: Open connection)");
+        }
         let ctx = PortContext::with_namespace(&cfg.ports, "recorder", &args.namespace)?;
         Ok(Self {
             rec,
             h,
             depth: ctx.subscriber(topics::DEPTH)?,
+            detections: ctx.subscriber(topics::DETECTIONS)?,
+            grid: ctx.subscriber(topics::NAV_GRID)?,
             state: ctx.subscriber(topics::STATE)?,
             truth: ctx.subscriber(topics::TRUTH)?,
             map: ctx.subscriber(topics::MAP)?,
@@ -109,6 +123,14 @@ impl NodeHost for RecorderHost {
         let mut any = false;
         while let Some(s) = self.depth.receive()? {
             h.record_depth(&s);
+            any = true;
+        }
+        while let Some(s) = self.detections.receive()? {
+            h.record_detections(&s);
+            any = true;
+        }
+        while let Some(s) = self.grid.receive()? {
+            h.record_nav_grid(&s);
             any = true;
         }
         while let Some(s) = self.state.receive()? {
@@ -144,6 +166,7 @@ impl NodeHost for RecorderHost {
 
     fn finish(self) -> Result<(), HostError> {
         let missed = self.depth.gaps()
+            + self.detections.gaps()
             + self.state.gaps()
             + self.truth.gaps()
             + self.map.gaps()

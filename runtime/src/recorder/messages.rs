@@ -1,0 +1,394 @@
+//! Our own channels' messages: protobuf with schemas derived by `foxglove::Encode` (the schema in
+//! the file is a `FileDescriptorSet` named `<lowercase name>.<Name>`, e.g.
+//! `plannerdecision.PlannerDecision`). Field numbers follow declaration order, so a field is only
+//! ever appended. Every type also derives `Deserialize`: [`super::decode`] reads any of them back
+//! (through the schema stored in the file), which is how `vpsom trace export` and `vpsom replay`
+//! read a trace.
+//!
+//! The `*Raw` types (and [`DepthMeta`]) carry a shared-memory message field for field, so a trace
+//! of the `replay` profile holds every input of the mapper and planner exactly.
+
+use foxglove::Encode;
+use foxglove::bytes::Bytes;
+use serde::{Deserialize, Serialize};
+
+/// One candidate view with every F(v) term (`/planner/decisions`).
+#[derive(Debug, Clone, Default, PartialEq, Encode, Serialize, Deserialize)]
+pub struct Candidate {
+    /// Camera position, world frame, metres.
+    pub position: Vec<f32>,
+    /// Yaw of the view, radians.
+    pub yaw: f32,
+    /// Downward pitch of the view, radians.
+    pub pitch: f32,
+    /// F(v).
+    pub value: f32,
+    /// Object term F_a.
+    pub f_a: f32,
+    /// Coverage term F_c.
+    pub f_c: f32,
+    /// H_sopm term.
+    pub h_sopm: f32,
+    /// H_iou term.
+    pub h_iou: f32,
+    /// cos θ_sopm.
+    pub cos_theta_sopm: f32,
+    /// C_asso.
+    pub c_asso: f32,
+    /// N_cp.
+    pub n_cp: f32,
+    /// cos θ_c.
+    pub cos_theta_c: f32,
+    /// Objects in the view.
+    pub objects_in_view: u32,
+    /// The view chosen.
+    pub chosen: bool,
+    /// Dropped before scoring (e.g. unreachable).
+    pub dropped: bool,
+}
+
+/// A GBV or LBV decision (`/planner/decisions`).
+#[derive(Debug, Clone, Default, PartialEq, Encode, Serialize, Deserialize)]
+pub struct PlannerDecision {
+    /// Sequence number of the decision.
+    pub seq: u64,
+    /// Monotonic stamp, ns.
+    pub stamp_ns: u64,
+    /// Simulated/robot time, ns.
+    pub sim_time_ns: u64,
+    /// `gbv` or `lbv`.
+    pub kind: String,
+    /// `running`, `terminated` or `no_candidates`.
+    pub state: String,
+    /// Sequence number of the map the decision was computed on (the input it consumed).
+    pub map_seq: u64,
+    /// Evaluation time, ns.
+    pub eval_ns: u64,
+    /// Cluster targeted (-1: none).
+    pub cluster_id: i32,
+    /// Candidates evaluated.
+    pub evaluated: u32,
+    /// F(v) of the chosen view (0 if none).
+    pub chosen_value: f32,
+    /// Every candidate.
+    pub candidates: Vec<Candidate>,
+}
+
+/// What an object map consumed (`/map/meta`): which frames, how many, when.
+#[derive(Debug, Clone, Default, PartialEq, Encode, Serialize, Deserialize)]
+pub struct MapMeta {
+    /// Header seq of the map.
+    pub seq: u64,
+    /// Monotonic stamp, ns.
+    pub stamp_ns: u64,
+    /// Simulated/robot time, ns.
+    pub sim_time_ns: u64,
+    /// Sequence number of the newest depth frame integrated.
+    pub last_frame_seq: u64,
+    /// Stamp of that frame, ns.
+    pub last_frame_stamp_ns: u64,
+    /// Objects in the map.
+    pub count: u32,
+    /// Frames integrated so far.
+    pub frames_integrated: u32,
+    /// Frames rejected so far (failed validation).
+    pub frames_rejected: u32,
+    /// Frames with no matching detections so far.
+    pub frames_unmatched: u32,
+}
+
+/// A navigation goal (`/planner/nav_goal`).
+#[derive(Debug, Clone, Default, PartialEq, Encode, Serialize, Deserialize)]
+pub struct NavGoal {
+    /// Sequence number.
+    pub seq: u64,
+    /// Monotonic stamp, ns.
+    pub stamp_ns: u64,
+    /// Simulated/robot time, ns.
+    pub sim_time_ns: u64,
+    /// Goal id.
+    pub goal_id: u64,
+    /// x, metres.
+    pub x: f32,
+    /// y, metres.
+    pub y: f32,
+    /// Yaw, radians.
+    pub yaw: f32,
+    /// Score of the goal.
+    pub score: f32,
+    /// Cluster targeted.
+    pub cluster_id: i32,
+    /// `gbv`, `coverage` or `frontier`.
+    pub kind: String,
+}
+
+/// A neck goal (`/planner/neck_goal`).
+#[derive(Debug, Clone, Default, PartialEq, Encode, Serialize, Deserialize)]
+pub struct NeckGoal {
+    /// Sequence number.
+    pub seq: u64,
+    /// Monotonic stamp, ns.
+    pub stamp_ns: u64,
+    /// Simulated/robot time, ns.
+    pub sim_time_ns: u64,
+    /// Sequence number of the map it was computed on.
+    pub map_seq: u64,
+    /// Stamp of the newest frame in that map, ns.
+    pub frame_stamp_ns: u64,
+    /// Neck yaw, radians.
+    pub yaw: f32,
+    /// Neck pitch, radians.
+    pub pitch: f32,
+    /// Score.
+    pub score: f32,
+}
+
+/// A deadline-monitor event (`/runtime/deadline`).
+#[derive(Debug, Clone, Default, PartialEq, Encode, Serialize, Deserialize)]
+pub struct DeadlineEvent {
+    /// Sequence number.
+    pub seq: u64,
+    /// Monotonic stamp, ns.
+    pub stamp_ns: u64,
+    /// Simulated/robot time, ns.
+    pub sim_time_ns: u64,
+    /// Thread name.
+    pub thread: String,
+    /// Cycle number.
+    pub cycle: u64,
+    /// Period, ns.
+    pub period_ns: u64,
+    /// Budget, ns.
+    pub budget_ns: u64,
+    /// Wake-up lateness, ns.
+    pub lateness_ns: i64,
+    /// Execution time (wall), ns.
+    pub exec_ns: u64,
+    /// CPU time of the cycle, ns.
+    pub cpu_ns: u64,
+    /// Run-queue wait in the cycle, ns.
+    pub run_wait_ns: u64,
+    /// Scheduler statistics were available.
+    pub sched_stats: bool,
+    /// Woken by the backup waker.
+    pub backup_wake: bool,
+    /// Misses in a row.
+    pub consecutive_misses: u32,
+    /// The deadline was missed.
+    pub miss: bool,
+    /// Cause of the miss.
+    pub miss_cause: String,
+}
+
+/// Latency of one node or path over a period.
+#[derive(Debug, Clone, Default, PartialEq, Encode, Serialize, Deserialize)]
+pub struct NodeLatencyMsg {
+    /// Node or path.
+    pub node: String,
+    /// Samples.
+    pub count: u64,
+    /// Minimum, ns.
+    pub min_ns: u64,
+    /// Median, ns.
+    pub p50_ns: u64,
+    /// 90th percentile, ns.
+    pub p90_ns: u64,
+    /// 99th percentile, ns.
+    pub p99_ns: u64,
+    /// Maximum, ns.
+    pub max_ns: u64,
+    /// Mean, ns.
+    pub mean_ns: f64,
+}
+
+/// Per-period latency summary (`/runtime/latency`).
+#[derive(Debug, Clone, Default, PartialEq, Encode, Serialize, Deserialize)]
+pub struct LatencySummary {
+    /// End of the period, ns.
+    pub time_ns: u64,
+    /// Length of the period, ns.
+    pub period_ns: u64,
+    /// One entry per node or path.
+    pub nodes: Vec<NodeLatencyMsg>,
+}
+
+/// One number of `metrics.json`, by its dotted path (`completeness.recall`).
+#[derive(Debug, Clone, Default, PartialEq, Encode, Serialize, Deserialize)]
+pub struct MetricValue {
+    /// Dotted path of the value in `metrics.json`.
+    pub key: String,
+    /// The value.
+    pub value: f64,
+}
+
+/// The run's metrics (`/metrics`): the numbers, plottable, and the whole `metrics.json` text.
+#[derive(Debug, Clone, Default, PartialEq, Encode, Serialize, Deserialize)]
+pub struct Metrics {
+    /// Every numeric leaf.
+    pub values: Vec<MetricValue>,
+    /// `metrics.json` as written.
+    pub json: String,
+}
+
+/// Counts of one topic in the recorder (`/recorder/stats`).
+#[derive(Debug, Clone, Default, PartialEq, Encode, Serialize, Deserialize)]
+pub struct TopicCounts {
+    /// Topic.
+    pub topic: String,
+    /// Inputs offered to the recorder (primary topics only, else 0).
+    pub offered: u64,
+    /// Inputs dropped because the recorder fell behind.
+    pub dropped: u64,
+    /// Messages left out on purpose by the profile's rate limit.
+    pub throttled: u64,
+    /// Messages written.
+    pub written: u64,
+}
+
+/// The recorder's counters (`/recorder/stats`, every `stats_interval_s` and at finish).
+#[derive(Debug, Clone, Default, PartialEq, Encode, Serialize, Deserialize)]
+pub struct RecorderStats {
+    /// `replay` or `view`.
+    pub profile: String,
+    /// One entry per topic.
+    pub topics: Vec<TopicCounts>,
+    /// Sum of the drops.
+    pub dropped_total: u64,
+    /// Sum of the throttled messages.
+    pub throttled_total: u64,
+    /// The last stats of the recording.
+    pub last: bool,
+}
+
+/// `shm_types::RobotState`, every field (`/robot/state`).
+#[derive(Debug, Clone, Default, PartialEq, Encode, Serialize, Deserialize)]
+pub struct RobotStateRaw {
+    /// Header seq.
+    pub seq: u64,
+    /// Header stamp, ns.
+    pub stamp_ns: u64,
+    /// Header simulated time, ns.
+    pub sim_time_ns: u64,
+    /// Goal being driven to.
+    pub nav_goal_id: u64,
+    /// x, y, yaw.
+    pub base_pose: Vec<f32>,
+    /// Neck yaw, radians.
+    pub neck_yaw: f32,
+    /// Neck pitch, radians.
+    pub neck_pitch: f32,
+    /// Odometry covariance, row-major 3×3.
+    pub odom_cov: Vec<f32>,
+    /// Speed, m/s.
+    pub speed: f32,
+    /// Distance driven, m.
+    pub distance_m: f32,
+    /// Localisation ok.
+    pub localization_ok: u32,
+    /// Navigation status.
+    pub nav_status: u32,
+    /// Localisation failures so far.
+    pub localization_failures: u32,
+}
+
+/// One detection of [`DetectionsRaw`].
+#[derive(Debug, Clone, Default, PartialEq, Encode, Serialize, Deserialize)]
+pub struct DetectionRaw {
+    /// COCO class id.
+    pub class_id: u32,
+    /// Label value in the mask.
+    pub label: u32,
+    /// Score.
+    pub score: f32,
+    /// x0, y0, x1, y1, pixels.
+    pub bbox: Vec<u32>,
+    /// Mask pixels.
+    pub mask_pixels: u32,
+}
+
+/// `shm_types::Detections`, every field (`/detections`).
+#[derive(Debug, Clone, Default, PartialEq, Encode, Serialize, Deserialize)]
+pub struct DetectionsRaw {
+    /// Header seq.
+    pub seq: u64,
+    /// Header stamp, ns.
+    pub stamp_ns: u64,
+    /// Header simulated time, ns.
+    pub sim_time_ns: u64,
+    /// Sequence number of the depth frame they belong to.
+    pub frame_seq: u64,
+    /// Image width.
+    pub width: u32,
+    /// Image height.
+    pub height: u32,
+    /// Label masks present.
+    pub masks: u32,
+    /// The detections.
+    pub items: Vec<DetectionRaw>,
+    /// Per-pixel labels (empty without masks).
+    #[serde(with = "b64")]
+    pub labels: Bytes,
+}
+
+/// The rest of a `shm_types::DepthFrame` (`/camera/depth/meta`; the pixels are on `/camera/depth`).
+#[derive(Debug, Clone, Default, PartialEq, Encode, Serialize, Deserialize)]
+pub struct DepthMeta {
+    /// Header seq.
+    pub seq: u64,
+    /// Header stamp, ns.
+    pub stamp_ns: u64,
+    /// Header simulated time, ns.
+    pub sim_time_ns: u64,
+    /// Width, pixels (full resolution).
+    pub width: u32,
+    /// Height, pixels.
+    pub height: u32,
+    /// fx, fy, cx, cy, min_range, max_range.
+    pub intrinsics: Vec<f32>,
+    /// Camera pose: translation x, y, z then rotation x, y, z, w.
+    pub camera_pose: Vec<f32>,
+    /// Decimation of the pixels on `/camera/depth` (1 = exact).
+    pub decimation: u32,
+}
+
+/// `shm_types::OccupancyGrid`, every field (`/nav/grid`).
+#[derive(Debug, Clone, Default, PartialEq, Encode, Serialize, Deserialize)]
+pub struct OccupancyGridRaw {
+    /// Header seq.
+    pub seq: u64,
+    /// Header stamp, ns.
+    pub stamp_ns: u64,
+    /// Header simulated time, ns.
+    pub sim_time_ns: u64,
+    /// World x, y of cell (0, 0), metres.
+    pub origin: Vec<f32>,
+    /// Cell size, metres.
+    pub resolution: f32,
+    /// Cells per row.
+    pub width: u32,
+    /// Rows.
+    pub height: u32,
+    /// Cells, row-major.
+    #[serde(with = "b64")]
+    pub cells: Bytes,
+}
+
+/// `bytes` fields: base64 in the protobuf JSON mapping [`super::decode`] reads.
+mod b64 {
+    use base64::Engine;
+    use base64::engine::general_purpose::STANDARD;
+    use foxglove::bytes::Bytes;
+    use serde::{Deserialize, Deserializer, Serializer};
+
+    pub fn serialize<S: Serializer>(b: &Bytes, s: S) -> Result<S::Ok, S::Error> {
+        s.serialize_str(&STANDARD.encode(b))
+    }
+
+    pub fn deserialize<'de, D: Deserializer<'de>>(d: D) -> Result<Bytes, D::Error> {
+        let s = String::deserialize(d)?;
+        STANDARD
+            .decode(s)
+            .map(Bytes::from)
+            .map_err(serde::de::Error::custom)
+    }
+}
