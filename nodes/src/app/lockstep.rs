@@ -212,9 +212,11 @@ pub fn run_session(
             next_map += map_p;
         }
         if t >= next_lbv {
-            let neck = planner.neck_goal(&map, &state, t);
+            let mut neck = planner.neck_goal(&map, &state, t);
+            stamp(&mut neck.header, t);
             sim.set_neck_goal(&neck);
             if planner.lbv_decision(&mut lbv_trace) {
+                stamp(&mut lbv_trace.header, t);
                 log.observe_decision(&lbv_trace);
                 if let Some(r) = &rec {
                     r.record_decision(&lbv_trace);
@@ -237,10 +239,12 @@ pub fn run_session(
         loop {
             step = match step {
                 Step::Wait => break,
-                Step::Goal(goal) => {
+                Step::Goal(mut goal) => {
+                    stamp(&mut goal.header, t);
                     // A refused goal is reported back through RobotState (UNREACHABLE).
                     let _ = sim.set_nav_goal(&goal);
-                    if let Some(d) = planner.take_decision() {
+                    if let Some(mut d) = planner.take_decision() {
+                        stamp(&mut d.header, t);
                         log.observe_decision(&d);
                         if let Some(r) = &rec {
                             r.record_decision(&d);
@@ -371,4 +375,11 @@ pub fn config_for(base: &Config, label: &str) -> Result<Config, SessionError> {
         cfg.planner.ablation.disable(term)?;
     }
     Ok(cfg)
+}
+
+/// Stamps a planner output with the simulated time it was made at, as a deployment host's
+/// publisher does when it sends it (the logic leaves headers to its host).
+pub(crate) fn stamp(h: &mut shm_types::Header, t: u64) {
+    h.stamp_ns = t;
+    h.sim_time_ns = t;
 }

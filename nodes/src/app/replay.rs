@@ -24,6 +24,7 @@
 use crate::config::Config;
 use crate::eval::{self, MatchParams};
 use crate::mapper::Mapper;
+use super::lockstep::stamp;
 use crate::planner::{self, PlannerInputs, Step, ViewPlanner};
 use crate::sim::Scene;
 use runtime::recorder::convert;
@@ -705,8 +706,10 @@ pub fn replay(spec: &ReplaySpec) -> Result<ReplayReport, ReplayError> {
             next_map += map_p;
         }
         if t >= next_lbv {
-            let neck = planner.neck_goal(&map, &state, t);
+            let mut neck = planner.neck_goal(&map, &state, t);
+            stamp(&mut neck.header, t);
             if planner.lbv_decision(&mut lbv_trace) {
+                stamp(&mut lbv_trace.header, t);
                 sink.decision(&lbv_trace);
             }
             sink.neck(&neck);
@@ -722,8 +725,10 @@ pub fn replay(spec: &ReplaySpec) -> Result<ReplayReport, ReplayError> {
         loop {
             step = match step {
                 Step::Wait => break,
-                Step::Goal(goal) => {
-                    if let Some(d) = planner.take_decision() {
+                Step::Goal(mut goal) => {
+                    stamp(&mut goal.header, t);
+                    if let Some(mut d) = planner.take_decision() {
+                        stamp(&mut d.header, t);
                         sink.decision(&d);
                     }
                     sink.nav(&goal);
