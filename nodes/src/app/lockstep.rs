@@ -114,6 +114,8 @@ pub struct SessionResult {
     pub recorded: Recorded,
     /// The recorder's own summary (written, dropped), when recording.
     pub recorder: Option<runtime::recorder::RecorderSummary>,
+    /// The final exploration grid (the mapper's, from depth).
+    pub explore: Box<OccupancyGrid>,
 }
 
 /// Ground truth of a scene in the scorer's terms.
@@ -236,6 +238,7 @@ pub fn run_session(
                 Step::Goal(goal) => {
                     // A refused goal is reported back through RobotState (UNREACHABLE).
                     let _ = sim.set_nav_goal(&goal);
+                    log.observe_goal(goal.kind);
                     if let Some(d) = planner.take_decision() {
                         log.observe_decision(&d);
                         if let Some(r) = &rec {
@@ -306,6 +309,7 @@ pub fn run_session(
         frames,
         recorded,
         recorder,
+        explore,
     })
 }
 
@@ -351,8 +355,13 @@ pub fn write_outputs(
         .log
         .plot_input(&run, room(&spec.scene), &r.gt, &est, &r.metrics);
     eval::write_run_outputs(dir, &r.metrics, &est, &plot)?;
+    let frontier = planner::frontier::FrontierParams::new(&spec.config.planner);
+    super::gridpng::write(&dir.join(EXPLORE_FILE), &r.explore, &frontier)?;
     Ok(())
 }
+
+/// The final exploration grid with its frontiers, written next to `metrics.json`.
+pub const EXPLORE_FILE: &str = "explore.png";
 
 /// The configuration of a planner label: `vpsom`, `coverage`, `frontier`, or `vpsom-no-<term>`
 /// (an ablation of one F(v) term).

@@ -141,7 +141,7 @@ impl ViewPlanner for CoveragePlanner {
         if outcome == Outcome::Pending {
             // A waypoint is kept; a frontier goal while no cluster is left to circle.
             let frontier = current.is_some_and(|g| g.kind == goal_kind::FRONTIER);
-            if !frontier || open.is_empty() {
+            if !frontier || open.is_empty() && !self.session.frontier_goal_seen(inputs.explore) {
                 return Step::Wait;
             }
         }
@@ -262,7 +262,9 @@ impl ViewPlanner for FrontierPlanner {
         if let Some(step) = self.session.begin(inputs.map) {
             return step;
         }
-        if self.session.goals.poll(inputs.state) == Outcome::Pending {
+        if self.session.goals.poll(inputs.state) == Outcome::Pending
+            && !self.session.frontier_goal_seen(inputs.explore)
+        {
             return Step::Wait;
         }
         self.session.frontier_job(inputs)

@@ -284,8 +284,12 @@ impl ViewPlanner for VpsomPlanner {
         if outcome == Outcome::Pending {
             // A frontier goal is kept while no cluster is open, a GBV goal while one is; else
             // it is superseded.
+            // A frontier goal whose neighbourhood has been seen on the way is not driven to
+            // the end: the next frontier round starts (`frontier.seen_radius`).
             let frontier = current.is_some_and(|g| g.kind == goal_kind::FRONTIER);
-            if frontier == open.is_empty() {
+            if frontier == open.is_empty()
+                && !(frontier && self.session.frontier_goal_seen(inputs.explore))
+            {
                 return Step::Wait;
             }
         }
