@@ -1,25 +1,31 @@
 //! The final exploration grid of a run as a PNG (`explore.png` next to `metrics.json`), for
 //! seeing where exploration went and why: unknown grey, free white, occupied black, and the
-//! frontier cells the planners' exploration still sees (no blacklist) red. North is up; one
-//! pixel per cell, scaled ×2.
+//! frontier cells the planners' exploration still sees (no blacklist; the navigation grid
+//! flooded from the final base pose) red. North is up; one pixel per cell, scaled ×2.
 
 use crate::eval::EvalError;
-use crate::planner::frontier::{FrontierParams, frontiers};
+use crate::planner::frontier::{FrontierParams, frontiers_in};
+use crate::planner::reach::NavMap;
 use plotters::prelude::*;
 use shm_types::{OccupancyGrid, grid_cell};
 use std::path::Path;
 
 const SCALE: u32 = 2;
 
-/// Write `grid` with its frontiers (`params`, no blacklist) to `path`.
-pub fn write(path: &Path, grid: &OccupancyGrid, params: &FrontierParams) -> Result<(), EvalError> {
+/// Write `grid` with its frontiers (`params`, no blacklist, `nav` flooded) to `path`.
+pub fn write(
+    path: &Path,
+    grid: &OccupancyGrid,
+    params: &FrontierParams,
+    nav: &NavMap,
+) -> Result<(), EvalError> {
     let (w, h) = (grid.width, grid.height);
     let cells = grid.used();
     if w == 0 || h == 0 || cells.len() != (w * h) as usize {
         return Ok(());
     }
     let mut front = vec![false; cells.len()];
-    for f in frontiers(grid, &[], params) {
+    for f in frontiers_in(grid, &[], params, Some(nav)) {
         for i in f.cells {
             front[i] = true;
         }

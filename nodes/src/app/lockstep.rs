@@ -116,6 +116,10 @@ pub struct SessionResult {
     pub recorder: Option<runtime::recorder::RecorderSummary>,
     /// The final exploration grid (the mapper's, from depth).
     pub explore: Box<OccupancyGrid>,
+    /// The navigation grid.
+    pub nav: Box<OccupancyGrid>,
+    /// The final estimated base pose.
+    pub base: [f32; 3],
 }
 
 /// Ground truth of a scene in the scorer's terms.
@@ -310,6 +314,8 @@ pub fn run_session(
         recorded,
         recorder,
         explore,
+        nav,
+        base: state.base_pose,
     })
 }
 
@@ -356,7 +362,8 @@ pub fn write_outputs(
         .plot_input(&run, room(&spec.scene), &r.gt, &est, &r.metrics);
     eval::write_run_outputs(dir, &r.metrics, &est, &plot)?;
     let frontier = planner::frontier::FrontierParams::new(&spec.config.planner);
-    super::gridpng::write(&dir.join(EXPLORE_FILE), &r.explore, &frontier)?;
+    let nav = frontier.nav.flooded(&r.nav, [r.base[0], r.base[1]]);
+    super::gridpng::write(&dir.join(EXPLORE_FILE), &r.explore, &frontier, &nav)?;
     Ok(())
 }
 

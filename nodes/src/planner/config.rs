@@ -250,6 +250,9 @@ pub struct FrontierConfig {
     pub gain_weight: f32,
     /// Unknown regions smaller than this make no frontier, m² (0: all do).
     pub min_unknown_area_m2: f32,
+    /// Only UNKNOWN cells the base can reach (finite path on the inflated navigation grid) make
+    /// frontiers.
+    pub reachable_unknown: bool,
     /// A frontier goal being driven to is dropped (a new round chooses the next) once no
     /// frontier cell is left within this distance of it, metres (0: always driven to the end).
     pub seen_radius: f32,

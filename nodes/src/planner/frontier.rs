@@ -28,6 +28,8 @@ pub struct FrontierParams {
     /// Unknown regions (4-connected UNKNOWN cells) smaller than this, m², make no frontier: a
     /// pocket too small to hide a support cluster (0: every unknown cell counts).
     pub min_unknown_area_m2: f32,
+    /// Only UNKNOWN cells the base can reach make frontiers ([`frontiers_in`]).
+    pub reachable_unknown: bool,
     /// Reading of the navigation grid.
     pub nav: NavParams,
 }
@@ -40,6 +42,7 @@ impl FrontierParams {
             blacklist_radius: cfg.frontier.blacklist_radius,
             gain_weight: cfg.frontier.gain_weight,
             min_unknown_area_m2: cfg.frontier.min_unknown_area_m2,
+            reachable_unknown: cfg.frontier.reachable_unknown,
             nav: NavParams::new(cfg),
         }
     }
@@ -153,8 +156,23 @@ pub fn frontier_near(g: &OccupancyGrid, xy: [f32; 2], radius: f32) -> bool {
     false
 }
 
-/// Frontier clusters of the exploration grid, without blacklisted cells, largest first.
+/// Frontier clusters of the exploration grid, without blacklisted cells, largest first (every
+/// UNKNOWN cell counts: see [`frontiers_in`]).
 pub fn frontiers(g: &OccupancyGrid, blacklist: &[[f32; 2]], p: &FrontierParams) -> Vec<Frontier> {
+    frontiers_in(g, blacklist, p, None)
+}
+
+/// Frontier clusters of the exploration grid, without blacklisted cells, largest first. With
+/// `nav` (flooded from the robot) and `frontier.reachable_unknown`, an UNKNOWN cell counts only
+/// where the base could drive (finite path length on the inflated navigation grid): space
+/// behind walls or inside an obstacle's inflation band cannot be explored, so a free cell
+/// bordering only such cells (an outer wall whose face the depth rays missed) is no frontier.
+pub fn frontiers_in(
+    g: &OccupancyGrid,
+    blacklist: &[[f32; 2]],
+    p: &FrontierParams,
+    nav: Option<&NavMap>,
+) -> Vec<Frontier> {
     let (w, h) = (g.width as usize, g.height as usize);
     let cells = g.used();
     if cells.len() != w * h || w == 0 || h == 0 {
@@ -172,7 +190,13 @@ pub fn frontiers(g: &OccupancyGrid, blacklist: &[[f32; 2]], p: &FrontierParams) 
             }
             let unknown = |xx: usize, yy: usize| {
                 let j = yy * w + xx;
-                cells[j] == grid_cell::UNKNOWN && large.as_ref().is_none_or(|l| l[j])
+                cells[j] == grid_cell::UNKNOWN
+                    && large.as_ref().is_none_or(|l| l[j])
+                    && nav.is_none_or(|n| {
+                        !p.reachable_unknown
+                            || n.is_empty()
+                            || n.path_length(cell_center(g, j)).is_some()
+                    })
             };
             let near_unknown = (x > 0 && unknown(x - 1, y))
                 || (x + 1 < w && unknown(x + 1, y))
@@ -316,8 +340,8 @@ impl FrontierJob {
     /// Run the selection.
     pub fn run(self) -> FrontierResult {
         let p = self.params;
-        let fronts = frontiers(&self.explore, &self.blacklist, &p);
         let nav = p.nav.flooded(&self.nav, [self.base[0], self.base[1]]);
+        let fronts = frontiers_in(&self.explore, &self.blacklist, &p, Some(&nav));
         let goal = choose(&self.explore, &fronts, &nav, self.base, p.gain_weight);
         let view = goal
             .zip(self.scoring.as_ref())
@@ -345,6 +369,7 @@ mod tests {
             blacklist_radius: 0.5,
             gain_weight: 0.0,
             min_unknown_area_m2: 0.0,
+            reachable_unknown: false,
             nav: NavParams {
                 robot_radius: 0.2,
                 inflated: false,
