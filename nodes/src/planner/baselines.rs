@@ -133,6 +133,15 @@ impl ViewPlanner for CoveragePlanner {
         let open: Vec<ClusterInfo> = all
             .iter()
             .filter(|c| !self.circled.contains(&c.id) && !given_up.contains(&c.id))
+            // An empty duplicate of an earlier table (same footprint) is circled with it.
+            .filter(|c| {
+                c.foreground > 0
+                    || !inputs
+                        .map
+                        .objects()
+                        .iter()
+                        .any(|o| o.id as i32 == c.id && clusters::is_duplicate(inputs.map, o))
+            })
             .filter(|c| self.current.is_none_or(|cur| cur.id != c.id))
             .copied()
             .collect();
