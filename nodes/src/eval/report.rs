@@ -352,7 +352,12 @@ impl Report {
         planners.sort_by_key(|p| (paper_planner(p).unwrap_or(3), p.clone()));
         planners.dedup();
         let mut cells = BTreeMap::new();
-        for def in TABLE1.iter().chain(&TABLE2).chain(&HEALTH).chain(&DIAGNOSIS) {
+        for def in TABLE1
+            .iter()
+            .chain(&TABLE2)
+            .chain(&HEALTH)
+            .chain(&DIAGNOSIS)
+        {
             for planner in &planners {
                 let mut all = Vec::new();
                 for scene in &scenes {

@@ -9,6 +9,20 @@
 //! blacklisted when issued (reached or refused), exploration ends: no reachable frontier is left. The goal yaw points from
 //! the robot to the goal, so a forward-fixed camera arrives looking at the frontier.
 //!
+//!
+//! Three rules keep exploration from driving where nothing can be learnt (`[planner.frontier]`):
+//! - `reachable_unknown`: an UNKNOWN cell makes a frontier only where the base could drive
+//!   (finite path on the inflated navigation grid, [`frontiers_in`]). The face of a wall that no
+//!   depth ray hit leaves free cells bordering the unknown space behind the wall; no drive can
+//!   clear those.
+//! - `min_unknown_area_m2`: unknown pockets smaller than this (4-connected) make no frontier.
+//! - `seen_radius`: a frontier goal being driven to is dropped once no frontier cell is left
+//!   within this distance of it ([`frontier_near`]): the camera saw it on the way, the next round
+//!   chooses the next frontier.
+//!
+//! An exploration grid with no known cell at all (nothing integrated yet, e.g. SLAM not tracking
+//! at the start) is not an explored room: the round waits ([`any_known`]).
+//!
 //! Used by the frontier baseline and by VP-SOM and coverage to explore whenever no unfinished
 //! cluster is known (before, between and after their clusters).
 
