@@ -297,6 +297,10 @@ fn metrics_json_has_the_design_keys() {
         "per_object",
         "objects_given_up",
         "explored",
+        "path_gbv_m",
+        "path_explore_m",
+        "path_coverage_m",
+        "views",
     ];
     assert_eq!(keys.len(), REQUIRED_KEYS.len() + extras.len(), "{keys:?}");
     assert!(extras.iter().all(|k| keys.contains(k)));
@@ -380,4 +384,84 @@ fn map_json_round_trips_and_rescores() {
     );
     std::fs::write(&path, r#"{"scene":"s","objects":[{"class":"cup"}]}"#).unwrap();
     assert!(matches!(MapFile::read(&path), Err(EvalError::Json { .. })));
+}
+
+/// The path split by goal kind and the per-object view record (`path_*_m`, `views`), and the
+/// report's "where recall is lost" counts built on them.
+#[test]
+fn path_splits_by_goal_kind_and_views_say_where_recall_is_lost() {
+    use shm_types::goal_kind;
+    let mut log = SessionLog::new();
+    // 1 m before any goal (counted in no kind), 2 m to a frontier, 3 m to a GBV.
+    log.observe_truth(&state(0.0, 0.0, 0));
+    log.observe_truth(&state(1.0, 0.0, 0));
+    log.observe_goal(goal_kind::FRONTIER);
+    log.observe_truth(&state(3.0, 0.0, 0));
+    log.observe_goal(goal_kind::GBV);
+    log.observe_truth(&state(3.0, 3.0, 0));
+    // The cup (scene object 0) is well seen in one frame of two; the book (1) only as 100 px;
+    // the vase (3) never; object 2 is the table (background).
+    let mut vis = boxed_zeroed::<FrameVisibility>();
+    let seen = |object, visible_px, silhouette_px| ObjectVisibility {
+        object,
+        visible_px,
+        silhouette_px,
+        ..Default::default()
+    };
+    vis.count = 2;
+    vis.items[0] = seen(0, 300, 400);
+    vis.items[1] = seen(1, 100, 120);
+    log.observe_visibility(&vis);
+    vis.items[0] = seen(0, 300, 900);
+    log.observe_visibility(&vis);
+    log.finish(1_000_000_000, true, "done");
+    let mut table = gt("table", "dining table", [1.0, 0.0, 0.36], [1.0, 1.0, 0.72]);
+    table.background = true;
+    let g = vec![
+        gt("cup", "cup", [0.0, 0.0, 0.5], [0.1; 3]),
+        gt("book", "book", [1.0, 0.0, 0.5], [0.2, 0.3, 0.05]),
+        table,
+        gt("vase", "vase", [2.0, 0.0, 0.5], [0.1, 0.1, 0.3]),
+    ];
+    // Nothing mapped: all three foreground objects are missed.
+    let run = RunInfo {
+        scene: "s".into(),
+        planner: "vpsom".into(),
+        seed: 1,
+    };
+    let m = log.metrics(&run, &g, &[], &MatchParams::default());
+    assert!(close(m.path_length_m, 6.0));
+    assert!(close(m.path_explore_m.unwrap(), 2.0));
+    assert!(close(m.path_gbv_m.unwrap(), 3.0));
+    assert!(close(m.path_coverage_m.unwrap(), 0.0));
+    let v: Vec<(&str, u64, u64, u32)> = m
+        .views
+        .iter()
+        .map(|v| {
+            (
+                v.name.as_str(),
+                v.frames,
+                v.frames_well_seen,
+                v.max_visible_px,
+            )
+        })
+        .collect();
+    assert_eq!(
+        v,
+        [("cup", 2, 1, 300), ("book", 2, 0, 100), ("vase", 0, 0, 0)],
+        "foreground only, scene order; 300 of 900 px is less than half visible"
+    );
+    let r = Report::from_metrics(&[m]);
+    let cell = |key| r.cell("s", "vpsom", key).unwrap().mean;
+    assert!(close(cell("missed_well_seen"), 1.0), "the cup");
+    assert!(
+        close(cell("missed_never_well_seen"), 2.0),
+        "the book and the vase"
+    );
+    assert!(close(cell("path_explore_m"), 2.0));
+    assert!(close(cell("path_gbv_m"), 3.0));
+    // A host that reports no goals leaves the split undefined.
+    let (log, g, e) = sample_session();
+    let m = log.metrics(&run, &g, &e, &MatchParams::default());
+    assert_eq!((m.path_gbv_m, m.path_explore_m), (None, None));
 }

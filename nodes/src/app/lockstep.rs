@@ -114,6 +114,12 @@ pub struct SessionResult {
     pub recorded: Recorded,
     /// The recorder's own summary (written, dropped), when recording.
     pub recorder: Option<runtime::recorder::RecorderSummary>,
+    /// The final exploration grid (the mapper's, from depth).
+    pub explore: Box<OccupancyGrid>,
+    /// The navigation grid.
+    pub nav: Box<OccupancyGrid>,
+    /// The final estimated base pose.
+    pub base: [f32; 3],
 }
 
 /// Ground truth of a scene in the scorer's terms.
@@ -243,6 +249,7 @@ pub fn run_session(
                     stamp(&mut goal.header, t);
                     // A refused goal is reported back through RobotState (UNREACHABLE).
                     let _ = sim.set_nav_goal(&goal);
+                    log.observe_goal(goal.kind);
                     if let Some(mut d) = planner.take_decision() {
                         stamp(&mut d.header, t);
                         log.observe_decision(&d);
@@ -314,6 +321,9 @@ pub fn run_session(
         frames,
         recorded,
         recorder,
+        explore,
+        nav,
+        base: state.base_pose,
     })
 }
 
@@ -359,8 +369,14 @@ pub fn write_outputs(
         .log
         .plot_input(&run, room(&spec.scene), &r.gt, &est, &r.metrics);
     eval::write_run_outputs(dir, &r.metrics, &est, &plot)?;
+    let frontier = planner::frontier::FrontierParams::new(&spec.config.planner);
+    let nav = frontier.nav.flooded(&r.nav, [r.base[0], r.base[1]]);
+    super::gridpng::write(&dir.join(EXPLORE_FILE), &r.explore, &frontier, &nav)?;
     Ok(())
 }
+
+/// The final exploration grid with its frontiers, written next to `metrics.json`.
+pub const EXPLORE_FILE: &str = "explore.png";
 
 /// The configuration of a planner label: `vpsom`, `coverage`, `frontier`, or `vpsom-no-<term>`
 /// (an ablation of one F(v) term).

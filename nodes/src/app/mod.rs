@@ -4,6 +4,7 @@
 //! | module | what |
 //! |---|---|
 //! | [`deploy`] | `vpsom run`: one process per node over iceoryx2 on the real clock, launched and watched |
+//! | [`gridpng`] | a run's final exploration grid and its frontiers as `explore.png` |
 //! | [`lockstep`] | one process, one thread, simulated clock: deterministic sessions (bench, tests) |
 //! | [`bench`](mod@bench) | scenes × planners × seeds on the lockstep host, report and figures |
 //! | [`replay`] | `vpsom replay`: the mapper and planner re-run on a trace's recorded inputs |
@@ -14,6 +15,7 @@
 
 pub mod bench;
 pub mod deploy;
+pub mod gridpng;
 pub mod lockstep;
 pub mod replay;
 pub mod sensing;

@@ -7,7 +7,7 @@ use super::plot::{PlotInput, Room, ViewPose};
 use serde::{Deserialize, Serialize};
 use shm_types::{
     DeadlineEvent, FrameVisibility, ObjectMap, PlannerDecision, RobotState, class_name,
-    decision_kind,
+    decision_kind, goal_kind,
 };
 
 /// A ground-truth object (world frame, metres, radians), independent of the simulator's types.
@@ -276,6 +276,42 @@ pub struct Metrics {
     /// if the host did not say.
     #[serde(default)]
     pub explored: Option<bool>,
+    /// Base path driven while the current chassis goal was a GBV, metres (null if the host did
+    /// not report goals).
+    #[serde(default)]
+    pub path_gbv_m: Option<f64>,
+    /// Base path driven while the current chassis goal was a frontier (exploration), metres.
+    #[serde(default)]
+    pub path_explore_m: Option<f64>,
+    /// Base path driven while the current chassis goal was a coverage waypoint, metres.
+    #[serde(default)]
+    pub path_coverage_m: Option<f64>,
+    /// How each ground-truth foreground object was seen (rendered frames in which it was in
+    /// view), for finding where recall is lost: never in view, or in view but not mapped.
+    #[serde(default)]
+    pub views: Vec<ObjectViews>,
+}
+
+/// How often one ground-truth foreground object was in the camera's view during a run (from
+/// the simulator's visibility records: in front of the camera, in range, its unoccluded
+/// silhouette at least the detector's minimum size).
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+pub struct ObjectViews {
+    /// Ground-truth name.
+    pub name: String,
+    /// Frames in which it was in view.
+    pub frames: u64,
+    /// Frames in which at least [`ObjectViews::WELL_SEEN_PX`] of its pixels and half of its
+    /// silhouette were visible.
+    pub frames_well_seen: u64,
+    /// Most visible pixels in one frame.
+    pub max_visible_px: u32,
+}
+
+impl ObjectViews {
+    /// Visible pixels for a frame to count as "well seen" (COCO's small-object limit, 32², at
+    /// the bench's 320×240 camera is 256 px).
+    pub const WELL_SEEN_PX: u32 = 256;
 }
 
 /// A foreground object the planner gave up, as `metrics.json` lists it.
@@ -362,6 +398,9 @@ pub struct SessionLog {
     lbv: Vec<ViewPose>,
     given_up: Vec<GivenUpEntry>,
     explored: Option<bool>,
+    goal_kind: Option<u8>,
+    path_by_goal: Option<[f64; 3]>,
+    views: std::collections::BTreeMap<u32, (u64, u64, u32)>,
 }
 
 impl SessionLog {
@@ -386,6 +425,11 @@ impl SessionLog {
             let step = f64::from((xy[0] - last[0]).hypot(xy[1] - last[1]));
             if step.is_finite() {
                 self.path_length_m += step;
+                if let (Some(k), Some(by)) = (self.goal_kind, self.path_by_goal.as_mut())
+                    && let Some(p) = by.get_mut(usize::from(k))
+                {
+                    *p += step;
+                }
             }
         }
         self.last_xy = Some(xy);
@@ -445,6 +489,20 @@ impl SessionLog {
     /// ([`occlusion`](super::occlusion)).
     pub fn observe_visibility(&mut self, frame: &FrameVisibility) {
         self.non_occlusion.observe(frame);
+        for v in frame.items() {
+            let e = self.views.entry(v.object).or_default();
+            e.0 += 1;
+            let half = u64::from(v.visible_px) * 2 >= u64::from(v.silhouette_px);
+            e.1 += u64::from(v.visible_px >= ObjectViews::WELL_SEEN_PX && half);
+            e.2 = e.2.max(v.visible_px);
+        }
+    }
+
+    /// Feed the kind (`shm_types::goal_kind`) of a chassis goal the host issued: the path
+    /// driven from now on counts as that kind's (`path_gbv_m`, `path_explore_m`, ...).
+    pub fn observe_goal(&mut self, kind: u8) {
+        self.goal_kind = Some(kind);
+        self.path_by_goal.get_or_insert([0.0; 3]);
     }
 
     /// The non-occlusion accumulated so far.
@@ -540,7 +598,35 @@ impl SessionLog {
             per_object,
             objects_given_up: self.given_up.clone(),
             explored: self.explored,
+            path_gbv_m: self.path_by_goal.map(|p| p[usize::from(goal_kind::GBV)]),
+            path_explore_m: self
+                .path_by_goal
+                .map(|p| p[usize::from(goal_kind::FRONTIER)]),
+            path_coverage_m: self
+                .path_by_goal
+                .map(|p| p[usize::from(goal_kind::COVERAGE)]),
+            views: self.object_views(gt),
         }
+    }
+
+    /// Per ground-truth foreground object (scene order, as `gt`), how it was seen.
+    fn object_views(&self, gt: &[GtObject]) -> Vec<ObjectViews> {
+        gt.iter()
+            .enumerate()
+            .filter(|(_, g)| !g.background)
+            .map(|(i, g)| {
+                let (frames, well, max) = u32::try_from(i)
+                    .ok()
+                    .and_then(|i| self.views.get(&i).copied())
+                    .unwrap_or_default();
+                ObjectViews {
+                    name: g.name.clone(),
+                    frames,
+                    frames_well_seen: well,
+                    max_visible_px: max,
+                }
+            })
+            .collect()
     }
 
     /// The input of the run's figure (LBVs subsampled to at most [`PlotInput::MAX_LBV`]).

@@ -49,8 +49,8 @@ pub mod sensing;
 pub use mapfile::{MapFile, MapFileObject, rescore_map_file};
 pub use matching::{MatchParams, ObjectMatch};
 pub use metrics::{
-    EstObject, GivenUpEntry, GtObject, MapScore, Metrics, NbvKind, RunInfo, SessionLog,
-    estimates_from_map, score_map,
+    EstObject, GivenUpEntry, GtObject, MapScore, Metrics, NbvKind, ObjectViews, RunInfo,
+    SessionLog, estimates_from_map, score_map,
 };
 pub use occlusion::NonOcclusion;
 pub use plot::{PlotInput, Room, ViewPose, render_bench_figures, render_png};

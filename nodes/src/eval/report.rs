@@ -144,6 +144,66 @@ pub const HEALTH: [MetricDef; 5] = [
     },
 ];
 
+/// Where the path goes and where recall is lost (not in the paper): the base path split by the
+/// kind of chassis goal being driven to, and the ground-truth foreground objects not correctly
+/// mapped at the end, split by whether any frame showed them well (`metrics.json` `views`).
+pub const DIAGNOSIS: [MetricDef; 4] = [
+    MetricDef {
+        key: "path_gbv_m",
+        label: "Path to GBVs / coverage waypoints (m)",
+        better: Better::Lower,
+        decimals: 2,
+        get: |m| match (m.path_gbv_m, m.path_coverage_m) {
+            (None, None) => None,
+            (a, b) => Some(a.unwrap_or(0.0) + b.unwrap_or(0.0)),
+        },
+    },
+    MetricDef {
+        key: "path_explore_m",
+        label: "Path to frontiers (m)",
+        better: Better::Lower,
+        decimals: 2,
+        get: |m| m.path_explore_m,
+    },
+    MetricDef {
+        key: "missed_never_well_seen",
+        label: "Missed objects never well seen",
+        better: Better::Lower,
+        decimals: 2,
+        get: |m| missed(m, false),
+    },
+    MetricDef {
+        key: "missed_well_seen",
+        label: "Missed objects well seen (not mapped, merged or > 0.1 m off)",
+        better: Better::Lower,
+        decimals: 2,
+        get: |m| missed(m, true),
+    },
+];
+
+/// Foreground ground-truth objects of a run not correctly mapped whose best frames did
+/// (`well_seen`) or did not show them well (`ObjectViews::frames_well_seen`); `None` for a run
+/// without view records.
+fn missed(m: &Metrics, well_seen: bool) -> Option<f64> {
+    if m.views.is_empty() {
+        return None;
+    }
+    let n = m
+        .per_object
+        .iter()
+        .filter(|o| !o.background && !o.correct)
+        .filter(|o| {
+            let seen = m
+                .views
+                .iter()
+                .find(|v| v.name == o.name)
+                .is_some_and(|v| v.frames_well_seen > 0);
+            seen == well_seen
+        })
+        .count();
+    Some(n as f64)
+}
+
 /// The paper's values (Tables 1 and 2), rows scene 1, 2, 3, Ave; columns VP-SOM, Cover,
 /// Frontier; metrics in [`TABLE1`] / [`TABLE2`] order.
 pub const PAPER_TABLE1: [[[f64; 3]; 4]; 4] = [
@@ -292,7 +352,12 @@ impl Report {
         planners.sort_by_key(|p| (paper_planner(p).unwrap_or(3), p.clone()));
         planners.dedup();
         let mut cells = BTreeMap::new();
-        for def in TABLE1.iter().chain(&TABLE2).chain(&HEALTH) {
+        for def in TABLE1
+            .iter()
+            .chain(&TABLE2)
+            .chain(&HEALTH)
+            .chain(&DIAGNOSIS)
+        {
             for planner in &planners {
                 let mut all = Vec::new();
                 for scene in &scenes {
@@ -408,6 +473,8 @@ impl Report {
         self.table_md(&mut md, &TABLE2, Some(&PAPER_TABLE2));
         md.push_str("\n## Eq. 21 on true boxes, run health and background objects\n\n");
         self.table_md(&mut md, &HEALTH, None);
+        md.push_str("\n## Where the path goes and where recall is lost\n\n");
+        self.table_md(&mut md, &DIAGNOSIS, None);
         md.push_str(DEFINITIONS);
         if !figures.is_empty() {
             md.push_str("\n## Figures (one run per scene and planner, lowest seed)\n\n");
@@ -498,6 +565,12 @@ paper's eq. 21 estimates the same on projected boxes; the planner's own H_IoU is
 paper's Table 2 definition on the same pairs: 1 − Σ over the other foreground objects in view of
 |b_i ∩ b_j| / |b_i|, clamped to [0, 1], b the bounding box of the unoccluded silhouette; compare
 it, not the visible fraction, with the paper's figures; Localization failure = episodes of the failure model.
+Path to GBVs / frontiers = the part of the path driven while the current chassis goal was a GBV
+(or coverage waypoint) / a frontier (exploration). Missed objects = foreground ground-truth
+objects not correctly mapped at the end: never well seen = no frame showed at least 256 of its
+pixels (COCO's small-object limit at 320×240) with at least half its silhouette visible (the
+planner never gave the detector a good view); well seen = some frame did (lost by the detector
+or the mapper: not detected, merged with a neighbour, or estimated more than 0.1 m off).
 ";
 
 /// Every `metrics.json` under the given paths: a path that is a file is taken as is, a
@@ -551,6 +624,7 @@ pub fn write_report(out_dir: &Path, report: &Report, figures: &[Figure]) -> Resu
         ("table1.csv", report.csv("table1", &TABLE1)),
         ("table2.csv", report.csv("table2", &TABLE2)),
         ("health.csv", report.csv("health", &HEALTH)),
+        ("diagnosis.csv", report.csv("diagnosis", &DIAGNOSIS)),
     ];
     for (name, text) in files {
         let path = out_dir.join(name);

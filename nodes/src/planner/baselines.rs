@@ -133,6 +133,15 @@ impl ViewPlanner for CoveragePlanner {
         let open: Vec<ClusterInfo> = all
             .iter()
             .filter(|c| !self.circled.contains(&c.id) && !given_up.contains(&c.id))
+            // An empty duplicate of an earlier table (same footprint) is circled with it.
+            .filter(|c| {
+                c.foreground > 0
+                    || !inputs
+                        .map
+                        .objects()
+                        .iter()
+                        .any(|o| o.id as i32 == c.id && clusters::is_duplicate(inputs.map, o))
+            })
             .filter(|c| self.current.is_none_or(|cur| cur.id != c.id))
             .copied()
             .collect();
@@ -141,7 +150,7 @@ impl ViewPlanner for CoveragePlanner {
         if outcome == Outcome::Pending {
             // A waypoint is kept; a frontier goal while no cluster is left to circle.
             let frontier = current.is_some_and(|g| g.kind == goal_kind::FRONTIER);
-            if !frontier || open.is_empty() {
+            if !frontier || open.is_empty() && !self.session.frontier_goal_seen(inputs.explore) {
                 return Step::Wait;
             }
         }
@@ -262,7 +271,9 @@ impl ViewPlanner for FrontierPlanner {
         if let Some(step) = self.session.begin(inputs.map) {
             return step;
         }
-        if self.session.goals.poll(inputs.state) == Outcome::Pending {
+        if self.session.goals.poll(inputs.state) == Outcome::Pending
+            && !self.session.frontier_goal_seen(inputs.explore)
+        {
             return Step::Wait;
         }
         self.session.frontier_job(inputs)

@@ -89,8 +89,23 @@ pub fn cluster_info(map: &ObjectMap, id: i32, eps_sopm: f32) -> Option<ClusterIn
     })
 }
 
+/// Whether background object `o` is a duplicate of an earlier-seen one: its centre lies inside
+/// that object's cuboid footprint (xy; e.g. a table also mapped as "bed"). A cluster without
+/// foreground objects whose background object is such a duplicate is done at once: its table is
+/// the other cluster's, looked at with it. Does not allocate.
+pub fn is_duplicate(map: &ObjectMap, o: &MapObject) -> bool {
+    let c = Vec3::from(o.center);
+    map.objects().iter().any(|b| {
+        b.is_background()
+            && b.id != o.id
+            && (b.first_seen_ns, b.id) < (o.first_seen_ns, o.id)
+            && cuboid(b).contains(Vec3::new(c.x, c.y, b.center[2]), 0.0)
+    })
+}
+
 /// All clusters of the map sorted by first sighting (ties by id), with `done` decided by the
-/// mapper's completion flags and, for clusters without foreground objects, by `sides`.
+/// mapper's completion flags and, for clusters without foreground objects, by `sides` (or
+/// [`is_duplicate`]).
 pub fn clusters(
     map: &ObjectMap,
     eps_sopm: f32,
@@ -101,11 +116,11 @@ pub fn clusters(
         .objects()
         .iter()
         .filter(|o| o.is_background())
-        .filter_map(|o| cluster_info(map, o.id as i32, eps_sopm))
-        .map(|mut c| {
+        .filter_map(|o| Some((o, cluster_info(map, o.id as i32, eps_sopm)?)))
+        .map(|(o, mut c)| {
             c.sides_seen = sides.mask(c.id);
             if c.foreground == 0 {
-                c.done = sides.sides(c.id) >= min_sides;
+                c.done = sides.sides(c.id) >= min_sides || is_duplicate(map, o);
             }
             c
         })
@@ -133,7 +148,7 @@ pub fn first_unfinished(
         };
         c.sides_seen = sides.mask(id);
         if c.foreground == 0 {
-            c.done = sides.sides(id) >= min_sides;
+            c.done = sides.sides(id) >= min_sides || is_duplicate(map, o);
         }
         if !c.done && best.is_none_or(|b| (c.first_seen_ns, c.id) < (b.first_seen_ns, b.id)) {
             best = Some(c);

@@ -248,6 +248,14 @@ pub struct FrontierConfig {
     /// Information weight: a frontier's length (metres of frontier cells) counts as this many
     /// metres less path, so that large frontiers win over slightly nearer small ones.
     pub gain_weight: f32,
+    /// Unknown regions smaller than this make no frontier, m² (0: all do).
+    pub min_unknown_area_m2: f32,
+    /// Only UNKNOWN cells the base can reach (finite path on the inflated navigation grid) make
+    /// frontiers.
+    pub reachable_unknown: bool,
+    /// A frontier goal being driven to is dropped (a new round chooses the next) once no
+    /// frontier cell is left within this distance of it, metres (0: always driven to the end).
+    pub seen_radius: f32,
 }
 
 impl Default for FrontierConfig {
@@ -487,6 +495,18 @@ impl PlannerConfig {
             self.frontier.gain_weight.into(),
             0.0,
             100.0,
+        )?;
+        c.in_range(
+            "planner.frontier.min_unknown_area_m2",
+            self.frontier.min_unknown_area_m2.into(),
+            0.0,
+            100.0,
+        )?;
+        c.in_range(
+            "planner.frontier.seen_radius",
+            self.frontier.seen_radius.into(),
+            0.0,
+            10.0,
         )?;
         c.count("planner.give_up.rounds", self.give_up.rounds, 1, 1000)?;
         c.in_range(

@@ -9,6 +9,20 @@
 //! blacklisted when issued (reached or refused), exploration ends: no reachable frontier is left. The goal yaw points from
 //! the robot to the goal, so a forward-fixed camera arrives looking at the frontier.
 //!
+//!
+//! Three rules keep exploration from driving where nothing can be learnt (`[planner.frontier]`):
+//! - `reachable_unknown`: an UNKNOWN cell makes a frontier only where the base could drive
+//!   (finite path on the inflated navigation grid, [`frontiers_in`]). The face of a wall that no
+//!   depth ray hit leaves free cells bordering the unknown space behind the wall; no drive can
+//!   clear those.
+//! - `min_unknown_area_m2`: unknown pockets smaller than this (4-connected) make no frontier.
+//! - `seen_radius`: a frontier goal being driven to is dropped once no frontier cell is left
+//!   within this distance of it ([`frontier_near`]): the camera saw it on the way, the next round
+//!   chooses the next frontier.
+//!
+//! An exploration grid with no known cell at all (nothing integrated yet, e.g. SLAM not tracking
+//! at the start) is not an explored room: the round waits ([`any_known`]).
+//!
 //! Used by the frontier baseline and by VP-SOM and coverage to explore whenever no unfinished
 //! cluster is known (before, between and after their clusters).
 
@@ -25,6 +39,11 @@ pub struct FrontierParams {
     pub blacklist_radius: f32,
     /// A frontier's length (cells × resolution) counts as this many metres less path.
     pub gain_weight: f32,
+    /// Unknown regions (4-connected UNKNOWN cells) smaller than this, m², make no frontier: a
+    /// pocket too small to hide a support cluster (0: every unknown cell counts).
+    pub min_unknown_area_m2: f32,
+    /// Only UNKNOWN cells the base can reach make frontiers ([`frontiers_in`]).
+    pub reachable_unknown: bool,
     /// Reading of the navigation grid.
     pub nav: NavParams,
 }
@@ -36,6 +55,8 @@ impl FrontierParams {
             min_cells: cfg.frontier.min_cells,
             blacklist_radius: cfg.frontier.blacklist_radius,
             gain_weight: cfg.frontier.gain_weight,
+            min_unknown_area_m2: cfg.frontier.min_unknown_area_m2,
+            reachable_unknown: cfg.frontier.reachable_unknown,
             nav: NavParams::new(cfg),
         }
     }
@@ -62,14 +83,118 @@ fn cell_center(g: &OccupancyGrid, i: usize) -> [f32; 2] {
     ]
 }
 
-/// Frontier clusters of the exploration grid, without blacklisted cells, largest first.
+/// For every cell, whether it is UNKNOWN and part of a 4-connected unknown region of at least
+/// `min_cells` cells.
+fn large_unknown(cells: &[u8], w: usize, h: usize, min_cells: usize) -> Vec<bool> {
+    let mut large = vec![false; w * h];
+    let mut seen = vec![false; w * h];
+    let (mut stack, mut region) = (Vec::new(), Vec::new());
+    for s in 0..w * h {
+        if seen[s] || cells[s] != grid_cell::UNKNOWN {
+            continue;
+        }
+        seen[s] = true;
+        stack.push(s);
+        region.clear();
+        while let Some(i) = stack.pop() {
+            region.push(i);
+            let (x, y) = (i % w, i / w);
+            let mut visit = |j: usize| {
+                if !seen[j] && cells[j] == grid_cell::UNKNOWN {
+                    seen[j] = true;
+                    stack.push(j);
+                }
+            };
+            if x > 0 {
+                visit(i - 1);
+            }
+            if x + 1 < w {
+                visit(i + 1);
+            }
+            if y > 0 {
+                visit(i - w);
+            }
+            if y + 1 < h {
+                visit(i + w);
+            }
+        }
+        if region.len() >= min_cells {
+            for &i in &region {
+                large[i] = true;
+            }
+        }
+    }
+    large
+}
+
+/// Whether the grid has any known (free or occupied) cell: an all-unknown grid (nothing
+/// integrated yet, e.g. localization not yet tracking) is not an explored room.
+pub fn any_known(g: &OccupancyGrid) -> bool {
+    g.used().iter().any(|&c| c != grid_cell::UNKNOWN)
+}
+
+/// Whether a frontier cell lies within `radius` of `xy` (the goal of a frontier round is still
+/// worth driving to; once its neighbourhood is seen, it is not).
+pub fn frontier_near(g: &OccupancyGrid, xy: [f32; 2], radius: f32) -> bool {
+    let (w, h) = (g.width as usize, g.height as usize);
+    let cells = g.used();
+    if cells.len() != w * h || w == 0 || h == 0 || g.resolution <= 0.0 {
+        return false;
+    }
+    let to_cell = |v: f32, o: f32| ((v - o) / g.resolution).floor() as isize;
+    let (cx, cy) = (to_cell(xy[0], g.origin[0]), to_cell(xy[1], g.origin[1]));
+    let r = (radius / g.resolution).ceil() as isize;
+    let unknown = |x: isize, y: isize| {
+        x >= 0
+            && y >= 0
+            && (x as usize) < w
+            && (y as usize) < h
+            && cells[y as usize * w + x as usize] == grid_cell::UNKNOWN
+    };
+    for y in (cy - r).max(0)..=(cy + r).min(h as isize - 1) {
+        for x in (cx - r).max(0)..=(cx + r).min(w as isize - 1) {
+            if (x - cx).pow(2) + (y - cy).pow(2) > r * r {
+                continue;
+            }
+            let v = cells[y as usize * w + x as usize];
+            if is_free(v)
+                && (unknown(x - 1, y)
+                    || unknown(x + 1, y)
+                    || unknown(x, y - 1)
+                    || unknown(x, y + 1))
+            {
+                return true;
+            }
+        }
+    }
+    false
+}
+
+/// Frontier clusters of the exploration grid, without blacklisted cells, largest first (every
+/// UNKNOWN cell counts: see [`frontiers_in`]).
 pub fn frontiers(g: &OccupancyGrid, blacklist: &[[f32; 2]], p: &FrontierParams) -> Vec<Frontier> {
+    frontiers_in(g, blacklist, p, None)
+}
+
+/// Frontier clusters of the exploration grid, without blacklisted cells, largest first. With
+/// `nav` (flooded from the robot) and `frontier.reachable_unknown`, an UNKNOWN cell counts only
+/// where the base could drive (finite path length on the inflated navigation grid): space
+/// behind walls or inside an obstacle's inflation band cannot be explored, so a free cell
+/// bordering only such cells (an outer wall whose face the depth rays missed) is no frontier.
+pub fn frontiers_in(
+    g: &OccupancyGrid,
+    blacklist: &[[f32; 2]],
+    p: &FrontierParams,
+    nav: Option<&NavMap>,
+) -> Vec<Frontier> {
     let (w, h) = (g.width as usize, g.height as usize);
     let cells = g.used();
     if cells.len() != w * h || w == 0 || h == 0 {
         return Vec::new();
     }
     let r2 = p.blacklist_radius * p.blacklist_radius;
+    let min_unknown = (p.min_unknown_area_m2 / (g.resolution * g.resolution).max(1e-9)).ceil();
+    let large = (min_unknown > 1.0).then(|| large_unknown(cells, w, h, min_unknown as usize));
     let mut front = vec![false; w * h];
     for y in 0..h {
         for x in 0..w {
@@ -77,7 +202,16 @@ pub fn frontiers(g: &OccupancyGrid, blacklist: &[[f32; 2]], p: &FrontierParams) 
             if !is_free(cells[i]) {
                 continue;
             }
-            let unknown = |xx: usize, yy: usize| cells[yy * w + xx] == grid_cell::UNKNOWN;
+            let unknown = |xx: usize, yy: usize| {
+                let j = yy * w + xx;
+                cells[j] == grid_cell::UNKNOWN
+                    && large.as_ref().is_none_or(|l| l[j])
+                    && nav.is_none_or(|n| {
+                        !p.reachable_unknown
+                            || n.is_empty()
+                            || n.path_length(cell_center(g, j)).is_some()
+                    })
+            };
             let near_unknown = (x > 0 && unknown(x - 1, y))
                 || (x + 1 < w && unknown(x + 1, y))
                 || (y > 0 && unknown(x, y - 1))
@@ -204,6 +338,8 @@ pub struct FrontierResult {
     pub goal: Option<([f32; 3], f32)>,
     /// Frontier clusters found (reachable or not).
     pub frontiers: usize,
+    /// Whether the exploration grid had any known cell ([`any_known`]).
+    pub known: bool,
     /// Buffers handed back for reuse.
     pub explore: Box<OccupancyGrid>,
     /// Buffers handed back for reuse.
@@ -218,8 +354,8 @@ impl FrontierJob {
     /// Run the selection.
     pub fn run(self) -> FrontierResult {
         let p = self.params;
-        let fronts = frontiers(&self.explore, &self.blacklist, &p);
         let nav = p.nav.flooded(&self.nav, [self.base[0], self.base[1]]);
+        let fronts = frontiers_in(&self.explore, &self.blacklist, &p, Some(&nav));
         let goal = choose(&self.explore, &fronts, &nav, self.base, p.gain_weight);
         let view = goal
             .zip(self.scoring.as_ref())
@@ -227,6 +363,7 @@ impl FrontierJob {
         FrontierResult {
             goal,
             frontiers: fronts.len(),
+            known: any_known(&self.explore),
             explore: self.explore,
             nav: self.nav,
             view,
@@ -245,6 +382,8 @@ mod tests {
             min_cells: 3,
             blacklist_radius: 0.5,
             gain_weight: 0.0,
+            min_unknown_area_m2: 0.0,
+            reachable_unknown: false,
             nav: NavParams {
                 robot_radius: 0.2,
                 inflated: false,

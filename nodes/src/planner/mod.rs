@@ -48,9 +48,10 @@
 //! last), VP-SOM and coverage explore: first (before any cluster) a look-around in place (neck
 //! sweep through `bootstrap.look_around_steps` stops), then frontier goals on the exploration
 //! grid ([`frontier`]: near and informative; too small, unreachable or already visited frontiers
-//! are dropped, so exploration ends), the neck sweeping. A frontier goal is superseded as soon as
-//! an unfinished cluster appears; VP-SOM's last GBV goal is superseded by exploration once no
-//! cluster needs it. The room is *explored* when a frontier round finds no reachable frontier.
+//! are dropped, so exploration ends; unknown space the base cannot reach, e.g. behind a wall,
+//! makes none), the neck sweeping. A frontier goal is superseded as soon as an unfinished cluster
+//! appears, or once its neighbourhood was seen on the way (`frontier.seen_radius`); VP-SOM's last
+//! GBV goal is superseded by exploration once no cluster needs it. The room is *explored* when a frontier round finds no reachable frontier.
 //!
 //! # Termination (section 3.4, Algorithm 2, plus exploration)
 //! A foreground object is done when `complete` is set or `h_sopm < eps_sopm`, or when VP-SOM

@@ -439,6 +439,7 @@ pub(crate) struct Session {
     eps_sopm: f32,
     min_sides: usize,
     frontier: FrontierParams,
+    seen_radius: f32,
     /// Goal ids and counts.
     pub(crate) goals: Goals,
     /// Snapshot buffers.
@@ -473,6 +474,7 @@ impl Session {
             eps_sopm: cfg.eps_sopm,
             min_sides,
             frontier: FrontierParams::new(cfg),
+            seen_radius: cfg.frontier.seen_radius,
             goals: Goals::new(),
             buffers: Buffers::default(),
             sides: SideTracker::new(cfg.bootstrap.sectors),
@@ -545,6 +547,21 @@ impl Session {
         self.compute(PlannerJob::Frontier(job))
     }
 
+    /// Whether the current goal is a frontier goal whose neighbourhood has been seen since it
+    /// was issued (no frontier cell within `frontier.seen_radius` of it): it need not be driven
+    /// to any more, the next frontier round can start.
+    pub(crate) fn frontier_goal_seen(&self, explore: &OccupancyGrid) -> bool {
+        self.seen_radius > 0.0
+            && self.goals.current.is_some_and(|g| {
+                g.kind == goal_kind::FRONTIER
+                    && !super::frontier::frontier_near(
+                        explore,
+                        [g.pose[0], g.pose[1]],
+                        self.seen_radius,
+                    )
+            })
+    }
+
     /// The start of every `job_done`: the job is back. A frontier round ends here: its goal is
     /// issued (and blacklisted), or, when no reachable frontier remains, the room is marked
     /// explored and [`Back::Explored`] returned (the planner decides whether the session ends).
@@ -553,6 +570,7 @@ impl Session {
         self.pending = false;
         match output {
             JobOutput::Frontier(r) => {
+                let blank = r.explore.width > 0 && !r.known;
                 self.buffers.put_explore(r.explore);
                 self.buffers.put_nav(r.nav);
                 if let Some(sc) = r.scoring {
@@ -573,6 +591,9 @@ impl Session {
                             now_ns,
                         )))
                     }
+                    // Nothing integrated into the grid yet (e.g. localization not tracking at the
+                    // start): not explored, wait for the first frames.
+                    None if blank => Back::Step(Step::Wait),
                     None => {
                         self.explored = true;
                         Back::Explored
