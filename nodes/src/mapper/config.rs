@@ -73,6 +73,8 @@ pub struct MapperConfig {
     pub grid: GridConfig,
     /// Frame-to-map registration of the camera pose ([`super::register`]).
     pub registration: RegistrationConfig,
+    /// Footprint sizes from per-view extents (`[mapper.extensions] view_extents`).
+    pub view_extents: super::extent::ViewExtentConfig,
 }
 
 /// `[mapper.registration]` section: frame-to-map registration of the camera pose.
@@ -214,6 +216,10 @@ pub struct ExtensionsConfig {
     /// a phone lies within the support plane's band and its dark surface drops out) take their
     /// points from the box's rays on the mapped table top under them ([`FlatConfig`]).
     pub flat_objects: bool,
+    /// Publish a foreground object's footprint size fused from its per-view extents (median
+    /// over views that see each axis squarely) instead of the merged cloud's, which pose errors
+    /// between views smear ([`super::extent`], `[mapper.view_extents]`).
+    pub view_extents: bool,
 }
 
 impl Default for ExtensionsConfig {
@@ -484,6 +490,37 @@ impl MapperConfig {
             self.cross_merge_iou.into(),
             0.01,
             1.0,
+        )?;
+        let ve = &self.view_extents;
+        c.count(
+            "mapper.view_extents.max_views",
+            ve.max_views as usize,
+            1,
+            4096,
+        )?;
+        c.count(
+            "mapper.view_extents.points_per_view",
+            ve.points_per_view as usize,
+            3,
+            100_000,
+        )?;
+        c.in_range(
+            "mapper.view_extents.perpendicular_cos",
+            ve.perpendicular_cos.into(),
+            0.0,
+            1.0,
+        )?;
+        c.count(
+            "mapper.view_extents.min_views",
+            ve.min_views as usize,
+            1,
+            4096,
+        )?;
+        c.in_range(
+            "mapper.view_extents.border_px",
+            ve.border_px.into(),
+            0.0,
+            1000.0,
         )?;
         let fl = &self.flat;
         c.in_range("mapper.flat.max_height", fl.max_height.into(), 0.0, 0.2)?;

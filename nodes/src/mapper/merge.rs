@@ -118,6 +118,7 @@ impl Mapper {
                     let keep = if drop < keep { keep - 1 } else { keep };
                     let o = &mut self.objects[keep];
                     o.absorb(&gone);
+                    o.views.absorb(&gone.views, &self.cfg.view_extents);
                     let dyaw = o.refit(&mut self.cuboid_scratch, &mut self.centroids, &fit);
                     if !o.background {
                         rest_on_support(&mut o.cuboid, &self.supports, self.cfg.support_margin);

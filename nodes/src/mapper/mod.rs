@@ -15,6 +15,7 @@
 //! | [`cuboid`] | cuboid fitting (minimum-area rectangle over the convex hull) |
 //! | [`sopm`] | surface occupancy probability maps |
 //! | [`existence`] | existence log-odds: spurious objects are deleted |
+//! | [`extent`] | footprint sizes fused from per-view extents (pose-error smear) |
 //! | `merge.rs` | duplicate merging |
 //! | `sparse.rs` | confident detections with few points (glass, far small objects) |
 //! | `flat.rs` | flat objects (phones) located by their box on the table top |
@@ -53,6 +54,7 @@ pub mod association;
 pub mod config;
 pub mod cuboid;
 pub mod existence;
+pub mod extent;
 mod flat;
 pub mod grid;
 mod merge;
@@ -584,6 +586,16 @@ impl Mapper {
                 }
                 o.observations += 1;
                 o.update_sopm(&pts, cam_pos, dyaw);
+                let ve = &self.cfg.view_extents;
+                let b = ve.border_px;
+                let [x0, y0, x1, y1] = det.bbox.map(f32::from);
+                let cut = x0 < b
+                    || y0 < b
+                    || x1 > camera.width as f32 - b
+                    || y1 > camera.height as f32 - b;
+                if fg && self.cfg.extensions.view_extents && !cut {
+                    o.views.record(&pts, cam_pos, ve);
+                }
             }
             self.det_points[ob.index] = pts;
         }

@@ -83,6 +83,8 @@ pub struct MappedObject {
     pub last_view: Option<Vec3>,
     /// Viewpoints whose existence update was a hit ([`super::existence`]).
     pub hit_views: u32,
+    /// Per-view footprint extents ([`super::extent`]).
+    pub views: super::extent::ViewExtents,
 }
 
 impl MappedObject {
@@ -123,6 +125,7 @@ impl MappedObject {
             hit: false,
             last_view: None,
             hit_views: 0,
+            views: Default::default(),
         }
     }
 

@@ -49,7 +49,7 @@ impl Mapper {
             m.class_id = o.class_id;
             m.background = o.background as u8;
             m.center = o.cuboid.center.to_array();
-            m.size = o.cuboid.size.to_array();
+            m.size = self.published_size(o).to_array();
             m.yaw = o.cuboid.yaw;
             m.point_count = o.point_count;
             m.cluster_id = cluster_id;
@@ -90,6 +90,20 @@ impl Mapper {
         }
         self.samples = samples;
         out.count = count as u32;
+    }
+
+    /// The size an object is published with: with `[mapper.extensions] view_extents` a
+    /// foreground object's footprint comes from its per-view extents ([`super::extent`]).
+    pub fn published_size(&self, o: &MappedObject) -> Vec3 {
+        if o.background || !self.cfg.extensions.view_extents {
+            return o.cuboid.size;
+        }
+        o.views.size(
+            o.cuboid.size,
+            o.cuboid.yaw,
+            self.cfg.extent_quantile,
+            &self.cfg.view_extents,
+        )
     }
 
     /// Background object supporting a foreground object: its footprint (grown by 5 cm) holds the
