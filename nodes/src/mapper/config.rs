@@ -55,6 +55,9 @@ pub struct MapperConfig {
     pub min_score: f32,
     /// Duplicate merge across classes (`[mapper.extensions] cross_class`): cuboid IoU ≥ this.
     pub cross_merge_iou: f32,
+    /// `[mapper.extensions] co_detection`: two foreground objects detected together (each by
+    /// its own detection of one frame) in at least this many frames are never merged.
+    pub distinct_after: u32,
     /// Sparse fallback (`[mapper.extensions] sparse_fallback`).
     pub sparse: SparseConfig,
     /// Flat objects (`[mapper.extensions] flat_objects`).
@@ -220,6 +223,11 @@ pub struct ExtensionsConfig {
     /// over views that see each axis squarely) instead of the merged cloud's, which pose errors
     /// between views smear ([`super::extent`], `[mapper.view_extents]`).
     pub view_extents: bool,
+    /// Two foreground objects detected together (each hit by its own detection of one frame)
+    /// in `[mapper] distinct_after` frames are two objects: never merged as duplicates, however
+    /// far their smeared cuboids grow into each other (same-class neighbours, two books 5 cm
+    /// apart).
+    pub co_detection: bool,
 }
 
 impl Default for ExtensionsConfig {
@@ -491,6 +499,12 @@ impl MapperConfig {
             0.01,
             1.0,
         )?;
+        c.count(
+            "mapper.distinct_after",
+            self.distinct_after as usize,
+            1,
+            1_000_000,
+        )?;
         let ve = &self.view_extents;
         c.count(
             "mapper.view_extents.max_views",
@@ -521,6 +535,18 @@ impl MapperConfig {
             ve.border_px.into(),
             0.0,
             1000.0,
+        )?;
+        c.in_range(
+            "mapper.view_extents.point_quantile",
+            ve.point_quantile.into(),
+            0.0,
+            0.2,
+        )?;
+        c.in_range(
+            "mapper.view_extents.view_quantile",
+            ve.view_quantile.into(),
+            0.0,
+            1.0,
         )?;
         let fl = &self.flat;
         c.in_range("mapper.flat.max_height", fl.max_height.into(), 0.0, 0.2)?;

@@ -8,11 +8,12 @@
 //! view's extent is free of that smear.
 //!
 //! Each object keeps a bounded set of views: a subsample of the view's points and the horizontal
-//! line of sight. The footprint size along a cuboid axis is the median, over the views whose line
-//! of sight is roughly perpendicular to that axis (|cos| ≤ `perpendicular_cos`: they see the
-//! object's full width along it, its silhouette), of the view's robust extent along the axis.
-//! Views cut by the image border are not recorded (their extent is short). The median rejects
-//! both occluded views (short) and views with segmentation bleed (long). With fewer than
+//! line of sight. The footprint size along a cuboid axis is a quantile (`view_quantile`), over the
+//! views whose line of sight is roughly perpendicular to that axis (|cos| ≤ `perpendicular_cos`:
+//! they see the object's full width along it, its silhouette), of the view's robust extent along
+//! the axis.
+//! Views cut by the image border are not recorded (their extent is short). A middle quantile
+//! rejects both occluded or drop-out views (short) and views with segmentation bleed (long). With fewer than
 //! `min_views` such views the merged cloud's extent stays. The fused size never exceeds the
 //! merged cloud's (which holds every view's points).
 //!
@@ -35,6 +36,11 @@ pub struct ViewExtentConfig {
     pub min_views: u32,
     /// A detection box within this many pixels of the image border is cut: not recorded.
     pub border_px: f32,
+    /// Robust min/max quantile of one view's points along an axis.
+    pub point_quantile: f32,
+    /// Quantile over the views' extents taken as the size (0.5: median; higher leans to the
+    /// views that saw more of the object: occlusion, dropout and trimming only shorten a view).
+    pub view_quantile: f32,
 }
 
 impl Default for ViewExtentConfig {
@@ -112,8 +118,9 @@ impl ViewExtents {
     }
 
     /// Fused footprint size along the axes of `yaw` (x, y), each `None` when fewer than
-    /// `min_views` views see that axis squarely. `q` is the robust min/max quantile of a view.
-    pub fn fused(&self, yaw: f32, q: f32, cfg: &ViewExtentConfig) -> [Option<f32>; 2] {
+    /// `min_views` views see that axis squarely.
+    pub fn fused(&self, yaw: f32, cfg: &ViewExtentConfig) -> [Option<f32>; 2] {
+        let q = cfg.point_quantile;
         let (s, c) = yaw.sin_cos();
         let axes = [Vec2::new(c, s), Vec2::new(-s, c)];
         let mut vals = Vec::new();
@@ -130,14 +137,14 @@ impl ViewExtents {
                 let hi = quantile(&mut vals, 1.0 - q);
                 ext.push(hi - lo);
             }
-            (ext.len() >= cfg.min_views.max(1) as usize).then(|| quantile(&mut ext, 0.5))
+            (ext.len() >= cfg.min_views.max(1) as usize).then(|| quantile(&mut ext, cfg.view_quantile))
         })
     }
 
     /// The published size: the fused footprint extents where known, never larger than the
     /// merged cloud's `size` (z is kept).
-    pub fn size(&self, size: Vec3, yaw: f32, q: f32, cfg: &ViewExtentConfig) -> Vec3 {
-        let [x, y] = self.fused(yaw, q, cfg);
+    pub fn size(&self, size: Vec3, yaw: f32, cfg: &ViewExtentConfig) -> Vec3 {
+        let [x, y] = self.fused(yaw, cfg);
         Vec3::new(
             x.map_or(size.x, |v| v.min(size.x)),
             y.map_or(size.y, |v| v.min(size.y)),
@@ -157,6 +164,8 @@ mod tests {
             perpendicular_cos: 0.5,
             min_views: 2,
             border_px: 2.0,
+            point_quantile: 0.0,
+            view_quantile: 0.5,
         }
     }
 
@@ -200,7 +209,7 @@ mod tests {
             e.record(&pts, cam, &cfg());
         }
         let merged = merged_hi - merged_lo;
-        let size = e.size(merged.extend(0.1), 0.0, 0.0, &cfg());
+        let size = e.size(merged.extend(0.1), 0.0, &cfg());
         assert!(merged.x > 0.25 && merged.y > 0.15, "merged {merged}");
         assert!((size.x - 0.2).abs() < 1e-3, "{size}");
         assert!((size.y - 0.1).abs() < 1e-3, "{size}");
@@ -215,10 +224,10 @@ mod tests {
             let (pts, cam) = view_points(deg, Vec2::ZERO);
             e.record(&pts, cam, &cfg());
         }
-        let [x, y] = e.fused(0.0, 0.0, &cfg());
+        let [x, y] = e.fused(0.0, &cfg());
         assert_eq!(x, None);
         assert!((y.unwrap() - 0.1).abs() < 1e-3);
-        let size = e.size(Vec3::new(0.3, 0.2, 0.1), 0.0, 0.0, &cfg());
+        let size = e.size(Vec3::new(0.3, 0.2, 0.1), 0.0, &cfg());
         assert_eq!(size.x, 0.3);
     }
 

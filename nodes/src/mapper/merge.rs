@@ -24,6 +24,11 @@ impl Mapper {
         if a.background != b.background || a.observations == 0 || b.observations == 0 {
             return false;
         }
+        // Detected together (by two detections of one frame) often enough: two objects.
+        let k = self.cfg.distinct_after;
+        if self.cfg.extensions.co_detection && !a.background && a.co_seen_with(b.id) >= k {
+            return false;
+        }
         let (ca, cb) = (&a.cuboid, &b.cuboid);
         // Cheap reject: bounding circles apart.
         let (ra, rb) = (ca.size.truncate().length(), cb.size.truncate().length());

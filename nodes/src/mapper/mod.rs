@@ -332,6 +332,9 @@ impl Mapper {
         }
         self.reg.end_frame(&self.cfg.registration);
         self.det_order = order;
+        if self.cfg.extensions.co_detection {
+            self.count_co_detections();
+        }
         if self.cfg.extensions.existence {
             stats.deleted = self.update_existence(frame, &camera, &pose, dets);
         } else {
@@ -341,6 +344,26 @@ impl Mapper {
             stats.merged = self.merge_duplicates();
         }
         Ok(stats)
+    }
+
+    /// Every pair of foreground objects hit in this frame (each by its own detection) was
+    /// detected together once more.
+    fn count_co_detections(&mut self) {
+        let hit: Vec<u32> = self
+            .objects
+            .iter()
+            .filter(|o| o.hit && !o.background)
+            .map(|o| o.id)
+            .collect();
+        if hit.len() < 2 {
+            return;
+        }
+        for o in self.objects.iter_mut().filter(|o| o.hit && !o.background) {
+            let me = o.id;
+            for &id in hit.iter().filter(|&&id| id != me) {
+                o.add_co_seen(id, 1);
+            }
+        }
     }
 
     fn refresh_supports(&mut self) {

@@ -98,12 +98,8 @@ impl Mapper {
         if o.background || !self.cfg.extensions.view_extents {
             return o.cuboid.size;
         }
-        o.views.size(
-            o.cuboid.size,
-            o.cuboid.yaw,
-            self.cfg.extent_quantile,
-            &self.cfg.view_extents,
-        )
+        o.views
+            .size(o.cuboid.size, o.cuboid.yaw, &self.cfg.view_extents)
     }
 
     /// Background object supporting a foreground object: its footprint (grown by 5 cm) holds the
