@@ -137,7 +137,8 @@ impl ViewExtents {
                 let hi = quantile(&mut vals, 1.0 - q);
                 ext.push(hi - lo);
             }
-            (ext.len() >= cfg.min_views.max(1) as usize).then(|| quantile(&mut ext, cfg.view_quantile))
+            (ext.len() >= cfg.min_views.max(1) as usize)
+                .then(|| quantile(&mut ext, cfg.view_quantile))
         })
     }
 

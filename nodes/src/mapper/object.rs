@@ -145,10 +145,7 @@ impl MappedObject {
 
     /// Frames in which this object and object `id` were detected together.
     pub fn co_seen_with(&self, id: u32) -> u32 {
-        self.co_seen
-            .iter()
-            .find(|c| c.0 == id)
-            .map_or(0, |c| c.1)
+        self.co_seen.iter().find(|c| c.0 == id).map_or(0, |c| c.1)
     }
 
     /// Add a class vote; the class becomes the majority (by summed score).
