@@ -1,7 +1,8 @@
 //! Mapper benchmark: one 640 × 480 frame with 10 visible objects (a table and nine objects on
 //! it) — point extraction, association, cuboid fits and SOPM updates — on a warmed-up map.
 //! Also `write_map` into a heap ObjectMap. Target: integrate ≤ 10 ms. Run with instance masks
-//! and with box-only detections (box segmentation).
+//! and with box-only detections (box segmentation); the `_boxes_plain` variant switches off
+//! `[mapper.extensions] view_extents` and `co_detection`, so one run shows what they cost.
 
 #[path = "../tests/mapper_common/mod.rs"]
 mod mapper_common;
@@ -17,20 +18,24 @@ use shm_types::{DepthFrame, Detections, ObjectMap, RobotState, boxed_zeroed};
 use std::hint::black_box;
 
 fn bench(c: &mut Criterion) {
-    run(c, false);
-    run(c, true);
+    let cfg = MapperConfig::default();
+    run(c, false, &cfg, "");
+    run(c, true, &cfg, "_boxes");
+    let mut plain = cfg.clone();
+    plain.extensions.view_extents = false;
+    plain.extensions.co_detection = false;
+    run(c, true, &plain, "_boxes_plain");
 }
 
-fn run(c: &mut Criterion, boxes: bool) {
+fn run(c: &mut Criterion, boxes: bool, cfg: &MapperConfig, suffix: &str) {
     let scene = busy_scene();
     let opts = RenderOpts {
         boxes,
         ..Default::default()
     };
-    let suffix = if boxes { "_boxes" } else { "" };
     let camera = CameraConfig::default().camera();
     let mount = CameraMount::default();
-    let mut mapper = Mapper::new(&MapperConfig::default(), &camera).expect("default config");
+    let mut mapper = Mapper::new(cfg, &camera).expect("default config");
     let mut rng = Pcg64::seed_from_u64(1);
     let state = RobotState {
         localization_ok: 1,

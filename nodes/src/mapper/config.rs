@@ -55,6 +55,9 @@ pub struct MapperConfig {
     pub min_score: f32,
     /// Duplicate merge across classes (`[mapper.extensions] cross_class`): cuboid IoU ≥ this.
     pub cross_merge_iou: f32,
+    /// `[mapper.extensions] co_detection`: two foreground objects detected together (each by
+    /// its own detection of one frame) in at least this many frames are never merged.
+    pub distinct_after: u32,
     /// Sparse fallback (`[mapper.extensions] sparse_fallback`).
     pub sparse: SparseConfig,
     /// Flat objects (`[mapper.extensions] flat_objects`).
@@ -73,6 +76,8 @@ pub struct MapperConfig {
     pub grid: GridConfig,
     /// Frame-to-map registration of the camera pose ([`super::register`]).
     pub registration: RegistrationConfig,
+    /// Footprint sizes from per-view extents (`[mapper.extensions] view_extents`).
+    pub view_extents: super::extent::ViewExtentConfig,
 }
 
 /// `[mapper.registration]` section: frame-to-map registration of the camera pose.
@@ -214,6 +219,15 @@ pub struct ExtensionsConfig {
     /// a phone lies within the support plane's band and its dark surface drops out) take their
     /// points from the box's rays on the mapped table top under them ([`FlatConfig`]).
     pub flat_objects: bool,
+    /// Publish a foreground object's footprint size fused from its per-view extents (median
+    /// over views that see each axis squarely) instead of the merged cloud's, which pose errors
+    /// between views smear ([`super::extent`], `[mapper.view_extents]`).
+    pub view_extents: bool,
+    /// Two foreground objects detected together (each hit by its own detection of one frame)
+    /// in `[mapper] distinct_after` frames are two objects: never merged as duplicates, however
+    /// far their smeared cuboids grow into each other (same-class neighbours, two books 5 cm
+    /// apart).
+    pub co_detection: bool,
 }
 
 impl Default for ExtensionsConfig {
@@ -483,6 +497,55 @@ impl MapperConfig {
             "mapper.cross_merge_iou",
             self.cross_merge_iou.into(),
             0.01,
+            1.0,
+        )?;
+        c.count(
+            "mapper.distinct_after",
+            self.distinct_after as usize,
+            1,
+            1_000_000,
+        )?;
+        let ve = &self.view_extents;
+        c.count(
+            "mapper.view_extents.max_views",
+            ve.max_views as usize,
+            1,
+            4096,
+        )?;
+        c.count(
+            "mapper.view_extents.points_per_view",
+            ve.points_per_view as usize,
+            3,
+            100_000,
+        )?;
+        c.in_range(
+            "mapper.view_extents.perpendicular_cos",
+            ve.perpendicular_cos.into(),
+            0.0,
+            1.0,
+        )?;
+        c.count(
+            "mapper.view_extents.min_views",
+            ve.min_views as usize,
+            1,
+            4096,
+        )?;
+        c.in_range(
+            "mapper.view_extents.border_px",
+            ve.border_px.into(),
+            0.0,
+            1000.0,
+        )?;
+        c.in_range(
+            "mapper.view_extents.point_quantile",
+            ve.point_quantile.into(),
+            0.0,
+            0.2,
+        )?;
+        c.in_range(
+            "mapper.view_extents.view_quantile",
+            ve.view_quantile.into(),
+            0.0,
             1.0,
         )?;
         let fl = &self.flat;

@@ -24,6 +24,11 @@ impl Mapper {
         if a.background != b.background || a.observations == 0 || b.observations == 0 {
             return false;
         }
+        // Detected together (by two detections of one frame) often enough: two objects.
+        let k = self.cfg.distinct_after;
+        if self.cfg.extensions.co_detection && !a.background && a.co_seen_with(b.id) >= k {
+            return false;
+        }
         let (ca, cb) = (&a.cuboid, &b.cuboid);
         // Cheap reject: bounding circles apart.
         let (ra, rb) = (ca.size.truncate().length(), cb.size.truncate().length());
@@ -118,6 +123,7 @@ impl Mapper {
                     let keep = if drop < keep { keep - 1 } else { keep };
                     let o = &mut self.objects[keep];
                     o.absorb(&gone);
+                    o.views.absorb(&gone.views, &self.cfg.view_extents);
                     let dyaw = o.refit(&mut self.cuboid_scratch, &mut self.centroids, &fit);
                     if !o.background {
                         rest_on_support(&mut o.cuboid, &self.supports, self.cfg.support_margin);

@@ -15,6 +15,7 @@
 //! | [`cuboid`] | cuboid fitting (minimum-area rectangle over the convex hull) |
 //! | [`sopm`] | surface occupancy probability maps |
 //! | [`existence`] | existence log-odds: spurious objects are deleted |
+//! | [`extent`] | footprint sizes fused from per-view extents (pose-error smear) |
 //! | `merge.rs` | duplicate merging |
 //! | `sparse.rs` | confident detections with few points (glass, far small objects) |
 //! | `flat.rs` | flat objects (phones) located by their box on the table top |
@@ -53,6 +54,7 @@ pub mod association;
 pub mod config;
 pub mod cuboid;
 pub mod existence;
+pub mod extent;
 mod flat;
 pub mod grid;
 mod merge;
@@ -330,6 +332,9 @@ impl Mapper {
         }
         self.reg.end_frame(&self.cfg.registration);
         self.det_order = order;
+        if self.cfg.extensions.co_detection {
+            self.count_co_detections();
+        }
         if self.cfg.extensions.existence {
             stats.deleted = self.update_existence(frame, &camera, &pose, dets);
         } else {
@@ -339,6 +344,26 @@ impl Mapper {
             stats.merged = self.merge_duplicates();
         }
         Ok(stats)
+    }
+
+    /// Every pair of foreground objects hit in this frame (each by its own detection) was
+    /// detected together once more.
+    fn count_co_detections(&mut self) {
+        let hit: Vec<u32> = self
+            .objects
+            .iter()
+            .filter(|o| o.hit && !o.background)
+            .map(|o| o.id)
+            .collect();
+        if hit.len() < 2 {
+            return;
+        }
+        for o in self.objects.iter_mut().filter(|o| o.hit && !o.background) {
+            let me = o.id;
+            for &id in hit.iter().filter(|&&id| id != me) {
+                o.add_co_seen(id, 1);
+            }
+        }
     }
 
     fn refresh_supports(&mut self) {
@@ -584,6 +609,16 @@ impl Mapper {
                 }
                 o.observations += 1;
                 o.update_sopm(&pts, cam_pos, dyaw);
+                let ve = &self.cfg.view_extents;
+                let b = ve.border_px;
+                let [x0, y0, x1, y1] = det.bbox.map(f32::from);
+                let cut = x0 < b
+                    || y0 < b
+                    || x1 > camera.width as f32 - b
+                    || y1 > camera.height as f32 - b;
+                if fg && self.cfg.extensions.view_extents && !cut {
+                    o.views.record(&pts, cam_pos, ve);
+                }
             }
             self.det_points[ob.index] = pts;
         }

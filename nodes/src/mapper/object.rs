@@ -83,6 +83,12 @@ pub struct MappedObject {
     pub last_view: Option<Vec3>,
     /// Viewpoints whose existence update was a hit ([`super::existence`]).
     pub hit_views: u32,
+    /// Per-view footprint extents ([`super::extent`]).
+    pub views: super::extent::ViewExtents,
+    /// Objects this one was detected together with (both hit by different detections of one
+    /// frame), with the number of such frames: two objects co-detected often are two objects,
+    /// never duplicates (`[mapper.extensions] co_detection`).
+    pub co_seen: Vec<(u32, u32)>,
 }
 
 impl MappedObject {
@@ -123,7 +129,23 @@ impl MappedObject {
             hit: false,
             last_view: None,
             hit_views: 0,
+            views: Default::default(),
+            co_seen: Vec::new(),
         }
+    }
+
+    /// Count `n` more frames in which this object and object `id` were detected together
+    /// (the larger count is kept when two records of `id` meet).
+    pub fn add_co_seen(&mut self, id: u32, n: u32) {
+        match self.co_seen.iter_mut().find(|c| c.0 == id) {
+            Some(c) => c.1 = c.1.saturating_add(n),
+            None => self.co_seen.push((id, n)),
+        }
+    }
+
+    /// Frames in which this object and object `id` were detected together.
+    pub fn co_seen_with(&self, id: u32) -> u32 {
+        self.co_seen.iter().find(|c| c.0 == id).map_or(0, |c| c.1)
     }
 
     /// Add a class vote; the class becomes the majority (by summed score).
@@ -214,6 +236,12 @@ impl MappedObject {
             self.asso = other.asso;
         }
         self.existence = self.existence.max(other.existence);
+        for &(id, n) in &other.co_seen {
+            if id != self.id {
+                self.add_co_seen(id, n);
+            }
+        }
+        self.co_seen.retain(|c| c.0 != other.id);
         self.hit_views = self.hit_views.max(other.hit_views);
         self.hit |= other.hit;
         if self.support_height.is_none() {

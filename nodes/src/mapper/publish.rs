@@ -51,7 +51,7 @@ impl Mapper {
             m.center = o.cuboid.center.to_array();
             // Clamped: a flat cuboid's extent can round to -1e-6 (more far from the origin),
             // and a negative size fails `ObjectMap` validation, which drops the whole map.
-            m.size = o.cuboid.size.max(Vec3::ZERO).to_array();
+            m.size = self.published_size(o).max(Vec3::ZERO).to_array();
             m.yaw = o.cuboid.yaw;
             m.point_count = o.point_count;
             m.cluster_id = cluster_id;
@@ -92,6 +92,16 @@ impl Mapper {
         }
         self.samples = samples;
         out.count = count as u32;
+    }
+
+    /// The size an object is published with: with `[mapper.extensions] view_extents` a
+    /// foreground object's footprint comes from its per-view extents ([`super::extent`]).
+    pub fn published_size(&self, o: &MappedObject) -> Vec3 {
+        if o.background || !self.cfg.extensions.view_extents {
+            return o.cuboid.size;
+        }
+        o.views
+            .size(o.cuboid.size, o.cuboid.yaw, &self.cfg.view_extents)
     }
 
     /// Background object supporting a foreground object: its footprint (grown by 5 cm) holds the
