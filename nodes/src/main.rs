@@ -93,7 +93,8 @@ struct RunCmd {
     /// Output directory (default: out/<scene>-<planner>-<seed>).
     #[arg(long)]
     out: Option<PathBuf>,
-    /// Service namespace (default: run<pid>, so concurrent runs never collide).
+    /// Service namespace (default: run<pid>, so concurrent runs never collide; with --link,
+    /// `[ports] namespace`, the same on both hosts).
     #[arg(long)]
     ns: Option<String>,
     /// Run in one process on the lockstep host instead (no IPC; deterministic).
@@ -114,6 +115,16 @@ struct RunCmd {
     /// `shm_types/include/vpsom_topics.h`); the run reports which have no publisher yet.
     #[arg(long, value_delimiter = ',', conflicts_with = "lockstep")]
     nodes: Vec<String>,
+    /// Bridge this run's topics to a run on another host with the same --ns, through
+    /// iceoryx2's link tunnel over zenoh: zenoh endpoints, `listen:`/`connect:` or bare (an
+    /// unspecified address such as tcp/0.0.0.0:7447 is listened on, any other connected to).
+    /// See README "Running across two machines".
+    #[arg(long, value_name = "ENDPOINT", num_args = 1.., conflicts_with = "lockstep")]
+    link: Vec<String>,
+    /// zenoh configuration file for --link (JSON5: endpoints, TLS, access control; default
+    /// `[link] zenoh_config`, else built in); the --link endpoints replace its lists.
+    #[arg(long, value_name = "FILE", requires = "link")]
+    zenoh_config: Option<PathBuf>,
 }
 
 #[derive(Debug, Args)]
@@ -223,6 +234,8 @@ fn main() -> ExitCode {
         lockstep: false,
         gbv_load: 0,
         nodes: Vec::new(),
+        link: Vec::new(),
+        zenoh_config: None,
     }));
     let result = match command {
         Command::Run(cmd) => run(config, cmd),
@@ -265,6 +278,7 @@ fn load_scene(name: &str) -> anyhow::Result<Scene> {
 
 fn run(config: Option<PathBuf>, cmd: RunCmd) -> anyhow::Result<ExitCode> {
     let (base, from) = Config::load_or_default(config.as_deref())?;
+    runtime::ports::set_domain(&base.ports.domain)?;
     let s = &cmd.session;
     let nodes = deploy::parse_nodes(&cmd.nodes).map_err(anyhow::Error::msg)?;
     // The sim needs a scene (`[sim] scene` by default); without it, a scene is only named to
@@ -285,9 +299,12 @@ fn run(config: Option<PathBuf>, cmd: RunCmd) -> anyhow::Result<ExitCode> {
     let out = cmd
         .out
         .unwrap_or_else(|| PathBuf::from(format!("out/{scene_label}-{}-{}", s.planner, s.seed)));
-    let ns = cmd
-        .ns
-        .unwrap_or_else(|| format!("run{}", std::process::id()));
+    // Hosts joined by --link must agree on the namespace: without --ns they take
+    // `[ports] namespace`, a run on its own host a fresh one.
+    let ns = cmd.ns.unwrap_or_else(|| match cmd.link.is_empty() {
+        true => format!("run{}", std::process::id()),
+        false => base.ports.namespace.clone(),
+    });
     eprintln!(
         "vpsom run: scene {} | planner {} | seed {} | camera {}x{} at {} Hz | time scale {} | \
          config {} | out {}{}{}",
@@ -338,6 +355,10 @@ fn run(config: Option<PathBuf>, cmd: RunCmd) -> anyhow::Result<ExitCode> {
             config_file: config,
             gbv_load: cmd.gbv_load,
             nodes,
+            link: (!cmd.link.is_empty()).then(|| deploy::link::LinkArgs {
+                endpoints: cmd.link.clone(),
+                zenoh_config: cmd.zenoh_config.clone(),
+            }),
         };
         let exe = std::env::current_exe().context("locating the vpsom executable")?;
         let outcome = deploy::run(&args, &cfg, &exe)?;
@@ -607,6 +628,7 @@ fn node(
     gbv_load: usize,
 ) -> anyhow::Result<ExitCode> {
     let cfg = deploy::run_config(&load_config(config.as_deref())?, &s.planner)?;
+    runtime::ports::set_domain(&cfg.ports.domain)?;
     let args = deploy::RunArgs {
         scene: s.scene,
         planner: s.planner,
@@ -617,6 +639,7 @@ fn node(
         config_file: config,
         gbv_load,
         nodes: vec![],
+        link: None,
     };
     match role {
         "sim" => deploy::sim_node(&args, &cfg)?,

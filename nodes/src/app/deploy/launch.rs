@@ -48,6 +48,8 @@ pub struct RunArgs {
     pub gbv_load: usize,
     /// The roles the launcher starts, in launch order (see [`external::parse_nodes`]).
     pub nodes: Vec<&'static str>,
+    /// `--link`: bridge this run's topics to another host (see [`super::link`]).
+    pub link: Option<super::link::LinkArgs>,
 }
 
 impl RunArgs {
@@ -100,6 +102,8 @@ pub struct RunOutcome {
     /// The mapper's account of the depth frames it received, from its last map:
     /// `(integrated, rejected as invalid, skipped for want of matching detections)`.
     pub mapper_frames: (u32, u32, u32),
+    /// What the tunnel to the other host moved (`--link`).
+    pub link: Option<super::link::LinkReport>,
     /// Why the run ended.
     pub reason: String,
     /// Whether a node failed for good.
@@ -130,6 +134,9 @@ impl RunOutcome {
         for (topic, n, invalid) in &self.external {
             t += &format!("| samples received on {topic} (external) | {n} |\n");
             t += &format!("| invalid samples dropped on {topic} (external) | {invalid} |\n");
+        }
+        if let Some(l) = &self.link {
+            t += &l.rows();
         }
         t
     }
@@ -173,6 +180,13 @@ pub fn run(args: &RunArgs, cfg: &Config, exe: &Path) -> anyhow::Result<RunOutcom
     let deadline = ctx.subscriber::<DeadlineEvent>(topics::DEADLINE)?;
     let nav = ctx.subscriber::<NavGoal>(topics::NAV_GOAL)?;
     let mut external = ExternalInputs::new(&ctx, &external::external_inputs(&args.nodes))?;
+    let link = match &args.link {
+        Some(l) => Some(super::link::Link::start(l, &args.namespace, &args.nodes, cfg)?),
+        None => None,
+    };
+    if let Some(l) = &link {
+        l.wait_for_peer(Duration::from_secs_f64(cfg.link.wait_for_peer_s), &stop);
+    }
     for &role in &args.nodes {
         launcher.spawn(ChildSpec {
             name: role.into(),
@@ -278,6 +292,9 @@ pub fn run(args: &RunArgs, cfg: &Config, exe: &Path) -> anyhow::Result<RunOutcom
         std::thread::sleep(Duration::from_millis(10));
     };
     eprintln!("\nstopping: {reason}");
+    if let Some(l) = &link {
+        l.quiesce();
+    }
     for (name, exit) in launcher.stop_all(Duration::from_secs_f64(cfg.run.stop_grace_s)) {
         if let Some(e) = exit {
             eprintln!("  {name}: {e}");
@@ -309,6 +326,14 @@ pub fn run(args: &RunArgs, cfg: &Config, exe: &Path) -> anyhow::Result<RunOutcom
     );
     // Count what the external inputs sent while the nodes stopped (the line is not news).
     let _ = external.poll(Instant::now())?;
+    // A failed tunnel does not cost the run its outputs: it is reported, the rest is written.
+    let link = link.and_then(|l| match l.finish() {
+        Ok(r) => Some(r),
+        Err(e) => {
+            eprintln!("link: {e}");
+            None
+        }
+    });
     // The planner's own account of its end (reason, explored, objects given up), if it left one.
     let outcome = std::fs::read(&outcome_file)
         .ok()
@@ -325,6 +350,7 @@ pub fn run(args: &RunArgs, cfg: &Config, exe: &Path) -> anyhow::Result<RunOutcom
             objects,
             external: external.samples(),
             mapper_frames,
+            link,
             reason,
             failed,
         });
@@ -349,6 +375,7 @@ pub fn run(args: &RunArgs, cfg: &Config, exe: &Path) -> anyhow::Result<RunOutcom
         objects,
         external: external.samples(),
         mapper_frames,
+        link,
         reason,
         failed,
     })
