@@ -254,6 +254,8 @@ pub struct LinkConfig {
     pub drain_s: f64,
     /// After the nodes stopped, keep the tunnel up this long (ms) so their last samples leave.
     pub linger_ms: u64,
+    /// Samples the tunnel's own subscribers buffer per small topic (see `link::watch`).
+    pub buffer: usize,
     /// Per-topic rate limit across the link (Hz, 0 = every sample), for the large topics
     /// (`depth`, `map`).
     pub max_hz: std::collections::BTreeMap<String, f64>,
@@ -276,6 +278,7 @@ impl LinkConfig {
         c.count("link.quiet_ms", self.quiet_ms as usize, 1, 600_000)?;
         c.in_range("link.drain_s", self.drain_s, 0.0, 600.0)?;
         c.count("link.linger_ms", self.linger_ms as usize, 0, 600_000)?;
+        c.count("link.buffer", self.buffer, 1, 256)?;
         for (topic, &hz) in &self.max_hz {
             c.require(
                 LINK_LIMITABLE.contains(&topic.as_str()),

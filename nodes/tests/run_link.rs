@@ -4,7 +4,11 @@
 //!
 //! - `recorder_across_the_link_records_what_the_robot_published`: sim + mapper + planner (and a
 //!   reference recorder) in domain A, a recorder in domain B; the session terminates, and B's
-//!   trace holds every sample of A's topics that A's own recorder saw.
+//!   trace holds every sample of A's topics that A's own recorder saw; depth frames, limited to
+//!   `[link.max_hz] depth` (the default 10 Hz), as many as crossed.
+//!
+//! The tests run one at a time (two `vpsom run`s each already fill the 2 CPUs), with buffers
+//! deep enough that no recorder loses a sample to the bursts in which samples come over TCP.
 //! - `planner_across_the_link_drives_the_robot`: the planner in domain B; its goals cross back,
 //!   the robot maps, and the session terminates.
 //! - `a_cut_link_is_counted_and_traffic_resumes`: the TCP connection between the hosts goes
@@ -26,9 +30,9 @@ use std::time::{Duration, Instant};
 /// Hang guard for one run (a session takes ~1 min here; a loaded CI machine is slower).
 const RUN_LIMIT: Duration = Duration::from_secs(900);
 
-/// The recorder's channels that come from the robot's topics, one message per sample.
-const FROM_TOPICS: [&str; 7] = [
-    topic::DEPTH,
+/// The recorder's channels that come from the robot's topics, one message per sample (depth
+/// apart: rate-limited).
+const FROM_TOPICS: [&str; 6] = [
     topic::TF,
     topic::TRUTH_TF,
     topic::MAP,
@@ -36,6 +40,24 @@ const FROM_TOPICS: [&str; 7] = [
     topic::NECK_GOAL,
     topic::DEADLINE,
 ];
+
+/// One test at a time.
+static SERIAL: std::sync::Mutex<()> = std::sync::Mutex::new(());
+
+/// `[ports]` for both hosts: every small topic 16 deep (the recorders poll every 2 ms; samples
+/// from the other host come in bursts); the large ones as deep as the defaults.
+const BUFFERS: &str = r#"
+[ports]
+subscriber_buffer = 16
+[ports.topics.map]
+subscriber_buffer = 4
+[ports.topics."map/grid"]
+subscriber_buffer = 4
+history_size = 1
+[ports.topics."nav/grid"]
+subscriber_buffer = 4
+history_size = 1
+"#;
 
 fn scratch(tag: &str) -> PathBuf {
     let d = std::env::temp_dir().join(format!("vpsom-link-{}-{tag}", std::process::id()));
@@ -58,11 +80,9 @@ fn free_port() -> u16 {
 fn host_config(dir: &Path, host: &str, domain: &str, extra: &str) -> PathBuf {
     let ideal = include_str!("../../config/sensing-ideal.toml");
     let path = dir.join(format!("{host}.toml"));
-    std::fs::write(
-        &path,
-        format!("{ideal}\n[ports]\ndomain = \"{domain}\"\n{extra}\n"),
-    )
-    .unwrap();
+    // `domain` goes into BUFFERS' [ports] table (a TOML table is opened once).
+    let ports = BUFFERS.replacen("[ports]\n", &format!("[ports]\ndomain = \"{domain}\"\n"), 1);
+    std::fs::write(&path, format!("{ideal}\n{ports}\n{extra}\n")).unwrap();
     path
 }
 
@@ -176,23 +196,18 @@ fn nothing_in_the_default_domain(ns: &str) {
 
 #[test]
 fn recorder_across_the_link_records_what_the_robot_published() {
+    let _one = SERIAL.lock().unwrap_or_else(|e| e.into_inner());
     let dir = scratch("rec");
     let pid = std::process::id();
     let ns = format!("lk{pid}r");
     let port = free_port();
-    // Every depth frame crosses here (no rate limit), so the counts must agree.
     let a = host_config(
         &dir,
         "a",
         &format!("l{pid}ra"),
-        "[link]\nwait_for_peer_s = 120.0\n[link.max_hz]\ndepth = 0.0\n",
+        "[link]\nwait_for_peer_s = 120.0\n",
     );
-    let b = host_config(
-        &dir,
-        "b",
-        &format!("l{pid}rb"),
-        "[link.max_hz]\ndepth = 0.0\n",
-    );
+    let b = host_config(&dir, "b", &format!("l{pid}rb"), "");
     let (out_a, out_b) = (dir.join("robot"), dir.join("station"));
     let listen = format!("listen:tcp/127.0.0.1:{port}");
     let connect = format!("tcp/127.0.0.1:{port}");
@@ -213,6 +228,7 @@ fn recorder_across_the_link_records_what_the_robot_published() {
     // The station's recorder subscribes before the robot publishes anything: the robot waits
     // for the link, the link for the station's bridges.
     wait_for_file(&out_b.join("trace.mcap"));
+    let start = Instant::now();
     let robot = Run::start(
         "robot",
         &a,
@@ -228,6 +244,7 @@ fn recorder_across_the_link_records_what_the_robot_published() {
         ],
     );
     let (ok_a, so_a, se_a) = robot.wait();
+    let wall = start.elapsed().as_secs_f64();
     let (ok_b, so_b, se_b) = station.wait();
     assert!(ok_a, "robot failed:\n{so_a}\n{se_a}");
     assert!(ok_b, "station failed:\n{so_b}\n{se_b}");
@@ -238,7 +255,10 @@ fn recorder_across_the_link_records_what_the_robot_published() {
     // The robot's planner ended the session, and the station heard it end.
     let m = metrics(&out_a);
     assert!(
-        m["termination_reason"].as_str().unwrap().starts_with("planner"),
+        m["termination_reason"]
+            .as_str()
+            .unwrap()
+            .starts_with("planner"),
         "{m}"
     );
     assert!(so_b.contains("| end | planner"), "station:\n{so_b}\n{se_b}");
@@ -250,20 +270,35 @@ fn recorder_across_the_link_records_what_the_robot_published() {
         assert!(na > 0, "{t}: nothing recorded on the robot\n{ia}");
         // Every sample the robot's own recorder saw crossed (the station may have one or two
         // more: the robot's recorder stops with the sim, the tunnel after it).
-        assert!(nb >= na, "{t}: station {nb} < robot {na}\n{ia}\n{ib}\n{se_b}");
+        assert!(
+            nb >= na,
+            "{t}: station {nb} < robot {na}\n{ia}\n{ib}\n{se_b}"
+        );
         // ... and none twice (a loop through the tunnel would double them).
         assert!(
             nb <= na + na / 20 + 5,
             "{t}: station {nb} >> robot {na}\n{ia}\n{ib}"
         );
     }
-    assert!(so_b.contains("| link: depth samples received |"), "{so_b}");
+    // Depth: every frame that crossed is in the trace, and no more than 10 Hz crossed.
+    let crossed = row(&so_b, "link: depth samples received").unwrap_or(0.0);
+    let depth = received(&ib, topic::DEPTH) as f64;
+    assert!(
+        depth >= 1.0 && depth == crossed,
+        "{depth} recorded, {crossed} crossed\n{so_b}"
+    );
+    assert!(
+        depth <= 10.0 * wall + 1.0,
+        "{depth} frames in {wall:.0} s\n{so_b}"
+    );
+    assert!((received(&ia, topic::DEPTH) as f64) > depth, "{ia}\n{ib}");
     nothing_in_the_default_domain(&ns);
     let _ = std::fs::remove_dir_all(&dir);
 }
 
 #[test]
 fn planner_across_the_link_drives_the_robot() {
+    let _one = SERIAL.lock().unwrap_or_else(|e| e.into_inner());
     let dir = scratch("plan");
     let pid = std::process::id();
     let ns = format!("lk{pid}p");
@@ -312,14 +347,23 @@ fn planner_across_the_link_drives_the_robot() {
     // by driving where the station's goals sent it.
     let m = metrics(&out_a);
     assert!(
-        m["termination_reason"].as_str().unwrap().starts_with("planner"),
+        m["termination_reason"]
+            .as_str()
+            .unwrap()
+            .starts_with("planner"),
         "{m}\n{se_a}"
     );
     assert!(m["path_length_m"].as_f64().unwrap() > 0.5, "{m}");
     assert!(m["objects_estimated"].as_u64().unwrap() > 0, "{m}");
     let ia = inspect::info(&out_a.join("trace.mcap")).unwrap();
-    assert!(ia.count(topic::NAV_GOAL) > 0 && ia.count(topic::NECK_GOAL) > 0, "{ia}");
-    assert!(so_a.contains("| link: nav/goal samples received |"), "{so_a}");
+    assert!(
+        ia.count(topic::NAV_GOAL) > 0 && ia.count(topic::NECK_GOAL) > 0,
+        "{ia}"
+    );
+    assert!(
+        so_a.contains("| link: nav/goal samples received |"),
+        "{so_a}"
+    );
     nothing_in_the_default_domain(&ns);
     let _ = std::fs::remove_dir_all(&dir);
 }
@@ -394,13 +438,16 @@ fn pump(mut from: TcpStream, mut to: TcpStream) {
 
 /// A number after `label` in a summary table row `| label | N |`.
 fn row(out: &str, label: &str) -> Option<f64> {
-    let line = out.lines().find(|l| l.starts_with(&format!("| {label} |")))?;
+    let line = out
+        .lines()
+        .find(|l| l.starts_with(&format!("| {label} |")))?;
     let cell = line.split('|').nth(2)?.trim();
     cell.split_whitespace().next()?.parse().ok()
 }
 
 #[test]
 fn a_cut_link_is_counted_and_traffic_resumes() {
+    let _one = SERIAL.lock().unwrap_or_else(|e| e.into_inner());
     let dir = scratch("cut");
     let pid = std::process::id();
     let ns = format!("lk{pid}c");
@@ -459,13 +506,19 @@ fn a_cut_link_is_counted_and_traffic_resumes() {
     // The robot went on without the station and ended the session itself.
     let m = metrics(&out_a);
     assert!(
-        m["termination_reason"].as_str().unwrap().starts_with("planner"),
+        m["termination_reason"]
+            .as_str()
+            .unwrap()
+            .starts_with("planner"),
         "{m}\n{se_a}"
     );
     // The station saw the link go and come back, counted the gap and the lost samples, and
     // heard the end of the session after it.
     assert!(se_b.contains("link: lost the other host"), "{se_b}");
-    assert!(se_b.contains("link: the other host is back after"), "{se_b}");
+    assert!(
+        se_b.contains("link: the other host is back after"),
+        "{se_b}"
+    );
     assert!(
         row(&so_b, "link: times the other host was lost (total s)").unwrap_or(0.0) >= 1.0,
         "{so_b}"

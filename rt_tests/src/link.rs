@@ -185,9 +185,8 @@ pub fn run(s: &IpcSettings, dir: &Path, log: &mut SampleLog) -> Result<Outcome> 
                     buffer: s.subscriber_buffer,
                     port: free_port()?,
                 };
-                let r = run_case(&wire).with_context(|| {
-                    format!("link case {payload} {transport} {rate} Hz")
-                })?;
+                let r = run_case(&wire)
+                    .with_context(|| format!("link case {payload} {transport} {rate} Hz"))?;
                 eprintln!(
                     "link {:>6} {:>6} {:>5} Hz: p50 {:.1} µs p99 {:.1} µs lost {}/{}",
                     r.payload,
@@ -285,7 +284,9 @@ fn report(s: &IpcSettings, dir: &Path, log: &mut SampleLog, cases: &[LinkCase]) 
             z.lost,
             z.sent
         );
-        ratios.push(json!({"payload": t.payload, "rate_hz": t.rate_hz, "p50_ratio": q, "p99_ratio": q99}));
+        ratios.push(
+            json!({"payload": t.payload, "rate_hz": t.rate_hz, "p50_ratio": q, "p99_ratio": q99}),
+        );
     }
     for &rate in &s.rates_hz {
         let series: Vec<Series<'_>> = cases
@@ -407,7 +408,10 @@ struct TunnelThread {
 
 impl TunnelThread {
     fn start(wire: &PeerWire, listen: bool, wake_on_local: bool) -> Result<Self> {
-        let (stop, ready) = (Arc::new(AtomicBool::new(false)), Arc::new(AtomicBool::new(false)));
+        let (stop, ready) = (
+            Arc::new(AtomicBool::new(false)),
+            Arc::new(AtomicBool::new(false)),
+        );
         let (s, r, w) = (stop.clone(), ready.clone(), wire.clone());
         let handle = std::thread::Builder::new()
             .name("link".into())

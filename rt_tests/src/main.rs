@@ -1,7 +1,8 @@
 //! `vpsom-rt-tests`: does the runtime hold its latency budgets on this machine?
 //!
 //! Subcommands `wakeup` (executor wake-up latency, optionally against `cyclictest`), `ipc`
-//! (one-way latency of the ports vs raw iceoryx2), `e2e` (a live `vpsom run` pipeline, or
+//! (one-way latency of the ports vs raw iceoryx2; `--layer link`: across the link tunnel vs
+//! plain zenoh), `e2e` (a live `vpsom run` pipeline, or
 //! `--fake`) and `smoke` (all three, tiny, for CI). Each writes `report.md`, `report.json`, PNG
 //! histograms and `samples.mcap` to `--out`; `--stress` adds CPU and memory load; `--check`
 //! exits with status 2 naming every violated budget. See `rt_tests/README.md`.

@@ -171,6 +171,16 @@ pub fn run(args: &RunArgs, cfg: &Config, exe: &Path) -> anyhow::Result<RunOutcom
             launcher.stale_nodes_removed_at_start()
         );
     }
+    // The tunnel first: it creates the run's services (see `link::watch`).
+    let link = match &args.link {
+        Some(l) => Some(super::link::Link::start(
+            l,
+            &args.namespace,
+            &args.nodes,
+            cfg,
+        )?),
+        None => None,
+    };
     // Subscribe before the nodes start so no decision or truth sample is missed.
     let ctx = PortContext::with_namespace(&cfg.ports, "run", &args.namespace)?;
     let truth = ctx.subscriber::<RobotState>(topics::TRUTH)?;
@@ -180,10 +190,6 @@ pub fn run(args: &RunArgs, cfg: &Config, exe: &Path) -> anyhow::Result<RunOutcom
     let deadline = ctx.subscriber::<DeadlineEvent>(topics::DEADLINE)?;
     let nav = ctx.subscriber::<NavGoal>(topics::NAV_GOAL)?;
     let mut external = ExternalInputs::new(&ctx, &external::external_inputs(&args.nodes))?;
-    let link = match &args.link {
-        Some(l) => Some(super::link::Link::start(l, &args.namespace, &args.nodes, cfg)?),
-        None => None,
-    };
     if let Some(l) = &link {
         l.wait_for_peer(Duration::from_secs_f64(cfg.link.wait_for_peer_s), &stop);
     }

@@ -80,9 +80,12 @@ pub fn parse_endpoint(value: &str) -> Result<Endpoint, LinkError> {
 
 /// The zenoh configuration of the tunnel: `file` as it is (the operator's endpoints, TLS,
 /// access control), or else the built-in one (peer mode, multicast scouting off so nothing
-/// on the network is joined by accident, no listener beyond the endpoints); then the `--link`
-/// endpoints replace the configuration's listen and/or connect lists.
-pub fn zenoh_config(file: Option<&Path>, endpoints: &[Endpoint]) -> Result<zenoh::Config, LinkError> {
+/// on the network is joined by accident, no listener beyond the endpoints, a deeper transmit
+/// queue); then the `--link` endpoints replace the configuration's listen and/or connect lists.
+pub fn zenoh_config(
+    file: Option<&Path>,
+    endpoints: &[Endpoint],
+) -> Result<zenoh::Config, LinkError> {
     let zerr = |key: &str, e: &dyn std::fmt::Display| LinkError::ZenohConfig {
         file: file.map_or_else(|| "<built-in>".into(), |f| f.display().to_string()),
         key: key.to_string(),
@@ -97,6 +100,15 @@ pub fn zenoh_config(file: Option<&Path>, endpoints: &[Endpoint]) -> Result<zenoh
                 ("scouting/multicast/enabled", "false"),
                 ("listen/endpoints", "[]"),
                 ("connect/endpoints", "[]"),
+                // A run sends large fixed-size samples (a 700 KB map, a 600 KB frame) beside
+                // small ones; with zenoh's defaults (2 batches of 64 KB, 1 ms before a drop) a
+                // small sample queued behind a frame's fragments is dropped. 16 batches (the
+                // maximum) and 20 ms: the tunnel thread may wait that long, never a node.
+                ("transport/link/tx/queue/size/data", "16"),
+                (
+                    "transport/link/tx/queue/congestion_control/drop/wait_before_drop",
+                    "20000",
+                ),
             ] {
                 c.insert_json5(key, value).map_err(|e| zerr(key, &e))?;
             }
@@ -141,7 +153,9 @@ mod tests {
             }
         );
         assert_eq!(
-            parse_endpoint("listen:tcp/127.0.0.1:7447").unwrap().direction,
+            parse_endpoint("listen:tcp/127.0.0.1:7447")
+                .unwrap()
+                .direction,
             Direction::Listen
         );
         assert_eq!(
@@ -156,7 +170,10 @@ mod tests {
             ("robot:7447", "expected <protocol>/<address>"),
             ("http/robot:80", "unknown protocol \"http\""),
             ("tcp/", "the address is empty"),
-            ("connect:tcp/0.0.0.0:1", "cannot connect to an unspecified address"),
+            (
+                "connect:tcp/0.0.0.0:1",
+                "cannot connect to an unspecified address",
+            ),
         ] {
             let e = parse_endpoint(value).unwrap_err().to_string();
             assert!(e.contains(value) && e.contains(why), "{value}: {e}");
@@ -175,10 +192,7 @@ mod tests {
         assert!(connect.contains("tcp/127.0.0.1:7000"), "{connect}");
         assert!(!connect.contains("7001"), "{connect}");
         assert!(listen.contains("tcp/0.0.0.0:7001"), "{listen}");
-        assert_eq!(
-            cfg.get_json("scouting/multicast/enabled").unwrap(),
-            "false"
-        );
+        assert_eq!(cfg.get_json("scouting/multicast/enabled").unwrap(), "false");
     }
 
     #[test]
@@ -189,8 +203,16 @@ mod tests {
         ));
         let cfg = zenoh_config(Some(file), &[parse_endpoint("tls/robot:7447").unwrap()])
             .unwrap_or_else(|e| panic!("{e}"));
-        assert!(cfg.get_json("connect/endpoints").unwrap().contains("tls/robot:7447"));
-        assert!(cfg.get_json("listen/endpoints").unwrap().contains("tls/0.0.0.0:7447"));
+        assert!(
+            cfg.get_json("connect/endpoints")
+                .unwrap()
+                .contains("tls/robot:7447")
+        );
+        assert!(
+            cfg.get_json("listen/endpoints")
+                .unwrap()
+                .contains("tls/0.0.0.0:7447")
+        );
         assert_eq!(cfg.get_json("access_control/enabled").unwrap(), "true");
     }
 

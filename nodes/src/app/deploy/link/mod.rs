@@ -106,7 +106,11 @@ pub enum LinkError {
 pub fn check_overflow(ports: &PortsConfig) -> Result<(), LinkError> {
     for topic in RUN_TOPICS {
         if ports.topic(topic).overflow == Overflow::Block {
-            let key = if ports.topics.get(topic).is_some_and(|o| o.overflow.is_some()) {
+            let key = if ports
+                .topics
+                .get(topic)
+                .is_some_and(|o| o.overflow.is_some())
+            {
                 format!("ports.topics.\"{topic}\".overflow")
             } else {
                 "ports.overflow".to_string()
@@ -134,6 +138,8 @@ pub(crate) struct Spec {
     limited: Vec<(&'static str, f64)>,
     poll_ms: u64,
     linger: Duration,
+    /// `[link] buffer`.
+    buffer: usize,
 }
 
 impl Spec {
@@ -197,13 +203,23 @@ impl LinkReport {
             self.gaps.len()
         );
         for c in &self.topics {
-            let dir = if c.inbound { "received" } else { "published here" };
+            let dir = if c.inbound {
+                "received"
+            } else {
+                "published here"
+            };
             t += &format!("| link: {} samples {dir} | {} |\n", c.topic, c.samples);
             if c.inbound {
-                t += &format!("| link: {} samples lost across the link | {} |\n", c.topic, c.lost);
+                t += &format!(
+                    "| link: {} samples lost across the link | {} |\n",
+                    c.topic, c.lost
+                );
             }
             if c.invalid > 0 {
-                t += &format!("| link: {} invalid samples dropped | {} |\n", c.topic, c.invalid);
+                t += &format!(
+                    "| link: {} invalid samples dropped | {} |\n",
+                    c.topic, c.invalid
+                );
             }
         }
         t
@@ -239,7 +255,11 @@ impl Link {
         let zenoh = zenoh_config(file.as_deref(), &endpoints)?;
         let local: Vec<&'static str> = RUN_TOPICS
             .into_iter()
-            .filter(|t| roles.iter().any(|r| super::external::outputs(r).contains(t)))
+            .filter(|t| {
+                roles
+                    .iter()
+                    .any(|r| super::external::outputs(r).contains(t))
+            })
             .collect();
         let limited: Vec<(&'static str, f64)> = RUN_TOPICS
             .into_iter()
@@ -262,6 +282,7 @@ impl Link {
             local,
             limited,
             poll_ms: cfg.link.poll_ms,
+            buffer: cfg.link.buffer,
             linger: Duration::from_millis(cfg.link.linger_ms),
         };
         let shared = Arc::new(Shared {
@@ -287,9 +308,10 @@ impl Link {
         // before any node starts.
         while !link.shared.started.load(Ordering::Relaxed) {
             if link.ended() {
-                return Err(link.finish().err().unwrap_or_else(|| {
-                    LinkError::Thread("ended before it started".into())
-                }));
+                return Err(link
+                    .finish()
+                    .err()
+                    .unwrap_or_else(|| LinkError::Thread("ended before it started".into())));
             }
             std::thread::sleep(Duration::from_millis(5));
         }
@@ -319,7 +341,10 @@ impl Link {
                 return false;
             }
             if !said {
-                eprintln!("link: waiting up to {:.0} s for the other host", limit.as_secs_f64());
+                eprintln!(
+                    "link: waiting up to {:.0} s for the other host",
+                    limit.as_secs_f64()
+                );
                 said = true;
             }
             std::thread::sleep(Duration::from_millis(20));
@@ -370,7 +395,10 @@ mod tests {
         let mut cfg = Config::builtin();
         cfg.ports.topics.entry("map".into()).or_default().overflow = Some(Overflow::Block);
         let e = check_overflow(&cfg.ports).unwrap_err().to_string();
-        assert!(e.contains("ports.topics.\"map\".overflow") && e.contains("map"), "{e}");
+        assert!(
+            e.contains("ports.topics.\"map\".overflow") && e.contains("map"),
+            "{e}"
+        );
         let mut cfg = Config::builtin();
         cfg.ports.overflow = Overflow::Block;
         let e = check_overflow(&cfg.ports).unwrap_err().to_string();

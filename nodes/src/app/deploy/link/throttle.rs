@@ -122,7 +122,10 @@ pub struct Throttle {
 impl std::fmt::Debug for Throttle {
     fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
         f.debug_struct("Throttle")
-            .field("relays", &self.relays.iter().map(|r| &r.0).collect::<Vec<_>>())
+            .field(
+                "relays",
+                &self.relays.iter().map(|r| &r.0).collect::<Vec<_>>(),
+            )
             .field("copied", &self.copied)
             .finish()
     }

@@ -100,7 +100,8 @@ fn all_bridged(link: &ZenohLink, allow: &HashSet<String>) -> Result<bool, LinkEr
 
 /// Run the tunnel until `shared.stop`, then for `linger` more; returns what it moved.
 pub(super) fn run(spec: Spec, shared: Arc<Shared>) -> Result<LinkReport, LinkError> {
-    let ctx = PortContext::with_namespace(&spec.ports, "link-ports", &spec.namespace)?;
+    let ports = super::watch::tunnel_ports(&spec.ports, spec.buffer);
+    let ctx = PortContext::with_namespace(&ports, "link-ports", &spec.namespace)?;
     let mut watch = Watch::new(&ctx, &spec.local, &spec.limited_topics())?;
     let mut throttle = Throttle::new(&ctx, &spec.limited, &spec.local)?;
 
@@ -180,7 +181,9 @@ pub(super) fn run(spec: Spec, shared: Arc<Shared>) -> Result<LinkReport, LinkErr
             .next_due()
             .map_or(poll, |t| t.saturating_duration_since(now).min(poll))
             .max(Duration::from_millis(1));
-        if let Err(e) = waitset.wait_and_process_once_with_timeout(|_| CallbackProgression::Continue, timeout) {
+        if let Err(e) =
+            waitset.wait_and_process_once_with_timeout(|_| CallbackProgression::Continue, timeout)
+        {
             errors.log("waiting", &format!("{e:?}"), now);
         }
         let _ = wake.try_wait(|_| {});
@@ -209,12 +212,17 @@ pub(super) fn run(spec: Spec, shared: Arc<Shared>) -> Result<LinkReport, LinkErr
             let connected = session.info().peers_zid().wait().next().is_some();
             match (connected, peer_lost_at) {
                 (false, None) if shared.peer_seen.load(Ordering::Relaxed) => {
-                    eprintln!("\nlink: lost the other host; local nodes go on, samples for it are dropped");
+                    eprintln!(
+                        "\nlink: lost the other host; local nodes go on, samples for it are dropped"
+                    );
                     peer_lost_at = Some(now);
                 }
                 (true, Some(t)) => {
                     let gap = now.duration_since(t);
-                    eprintln!("\nlink: the other host is back after {:.1} s", gap.as_secs_f64());
+                    eprintln!(
+                        "\nlink: the other host is back after {:.1} s",
+                        gap.as_secs_f64()
+                    );
                     gaps.push(gap);
                     peer_lost_at = None;
                 }

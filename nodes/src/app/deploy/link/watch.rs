@@ -1,7 +1,13 @@
 //! What crossed the link, per topic: the tunnel's own typed subscriber on every topic of the
-//! run (which also creates each service with the run's `[ports]` settings before the tunnel
-//! bridges it), counting the samples that came from the other host and the sequence numbers
-//! missing between them (lost across the link, or while it was down).
+//! run, counting the samples that came from the other host and the sequence numbers missing
+//! between them (lost across the link, or while it was down).
+//!
+//! These subscribers also create the run's services before anything else on the host does
+//! (the launcher starts the tunnel first), with the run's `[ports]` settings except that a
+//! small topic's services buffer up to [`LinkConfig::buffer`](crate::config::LinkConfig)
+//! samples per subscriber: the tunnel's own subscribers (the bridge's, and these) take that
+//! depth, so the bursts in which samples come over a network do not overwrite them, while the
+//! nodes' subscribers keep the depth they ask for (a service admits any depth up to its own).
 
 use crate::app::topics;
 use runtime::ports::{PortContext, ReceiveError, Subscriber, SubscriberError};
@@ -26,6 +32,46 @@ pub const RUN_TOPICS: [&str; 12] = [
     topics::DECISION,
     topics::DEADLINE,
 ];
+
+/// Topics whose message is at most this big get the tunnel's deeper buffer.
+pub const SMALL: usize = 16 * 1024;
+
+/// The size of a run topic's message, bytes.
+fn message_size(topic: &str) -> usize {
+    use std::mem::size_of;
+    match topic {
+        topics::DEPTH => size_of::<DepthFrame>(),
+        topics::DETECTIONS => size_of::<Detections>(),
+        topics::STATE | topics::TRUTH => size_of::<RobotState>(),
+        topics::VISIBILITY => size_of::<FrameVisibility>(),
+        topics::NAV_GRID | topics::MAP_GRID => size_of::<OccupancyGrid>(),
+        topics::MAP => size_of::<ObjectMap>(),
+        topics::NAV_GOAL => size_of::<NavGoal>(),
+        topics::NECK_GOAL => size_of::<NeckGoal>(),
+        topics::DECISION => size_of::<PlannerDecision>(),
+        topics::DEADLINE => size_of::<DeadlineEvent>(),
+        other => unreachable!("{other} is not a run topic"),
+    }
+}
+
+/// The `[ports]` settings the tunnel creates the run's services with: small topics buffer at
+/// least `buffer` samples per subscriber (see the module docs).
+pub fn tunnel_ports(
+    ports: &runtime::ports::PortsConfig,
+    buffer: usize,
+) -> runtime::ports::PortsConfig {
+    let mut p = ports.clone();
+    for topic in RUN_TOPICS {
+        if message_size(topic) <= SMALL {
+            let depth = ports.topic(topic).subscriber_buffer.max(buffer);
+            p.topics
+                .entry(topic.to_string())
+                .or_default()
+                .subscriber_buffer = Some(depth);
+        }
+    }
+    p
+}
 
 /// Least interval between two log lines about lost samples on one topic.
 const LOSS_LOG_EVERY: Duration = Duration::from_secs(1);
@@ -161,8 +207,7 @@ impl Watch {
             }
             if lost_now > 0 {
                 w.lost += lost_now;
-                if w
-                    .last_loss_log
+                if w.last_loss_log
                     .is_none_or(|t| now.duration_since(t) >= LOSS_LOG_EVERY)
                 {
                     w.last_loss_log = Some(now);
