@@ -59,6 +59,10 @@ subscriber_buffer = 4
 history_size = 1
 "#;
 
+/// `[link]` for both hosts: the tunnel's own buffers as deep as allowed (2.5 s of robot/state),
+/// so a tunnel thread the loaded machine leaves unscheduled for a while still loses nothing.
+const LINK_BUFFER: &str = "buffer = 256\n";
+
 fn scratch(tag: &str) -> PathBuf {
     let d = std::env::temp_dir().join(format!("vpsom-link-{}-{tag}", std::process::id()));
     let _ = std::fs::remove_dir_all(&d);
@@ -205,9 +209,14 @@ fn recorder_across_the_link_records_what_the_robot_published() {
         &dir,
         "a",
         &format!("l{pid}ra"),
-        "[link]\nwait_for_peer_s = 120.0\n",
+        &format!("[link]\n{LINK_BUFFER}wait_for_peer_s = 120.0\n"),
     );
-    let b = host_config(&dir, "b", &format!("l{pid}rb"), "");
+    let b = host_config(
+        &dir,
+        "b",
+        &format!("l{pid}rb"),
+        &format!("[link]\n{LINK_BUFFER}"),
+    );
     let (out_a, out_b) = (dir.join("robot"), dir.join("station"));
     let listen = format!("listen:tcp/127.0.0.1:{port}");
     let connect = format!("tcp/127.0.0.1:{port}");
@@ -307,9 +316,14 @@ fn planner_across_the_link_drives_the_robot() {
         &dir,
         "a",
         &format!("l{pid}pa"),
-        "[link]\nwait_for_peer_s = 120.0\n",
+        &format!("[link]\n{LINK_BUFFER}wait_for_peer_s = 120.0\n"),
     );
-    let b = host_config(&dir, "b", &format!("l{pid}pb"), "");
+    let b = host_config(
+        &dir,
+        "b",
+        &format!("l{pid}pb"),
+        &format!("[link]\n{LINK_BUFFER}"),
+    );
     let (out_a, out_b) = (dir.join("robot"), dir.join("station"));
     let station = Run::start(
         "station",
@@ -458,9 +472,14 @@ fn a_cut_link_is_counted_and_traffic_resumes() {
         &dir,
         "a",
         &format!("l{pid}ca"),
-        &format!("[link]\nwait_for_peer_s = 120.0\n{limit}"),
+        &format!("[link]\n{LINK_BUFFER}wait_for_peer_s = 120.0\n{limit}"),
     );
-    let b = host_config(&dir, "b", &format!("l{pid}cb"), &limit);
+    let b = host_config(
+        &dir,
+        "b",
+        &format!("l{pid}cb"),
+        &format!("[link]\n{LINK_BUFFER}{limit}"),
+    );
     let (out_a, out_b) = (dir.join("robot"), dir.join("station"));
     let proxy = Proxy::start(proxy_port, port);
     let station = Run::start(

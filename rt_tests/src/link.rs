@@ -586,7 +586,7 @@ fn receive<T: Message>(wire: &PeerWire) -> Result<LinkCase> {
         received,
         lost: wire.count.saturating_sub(received),
         rate_achieved: if span > 0.0 {
-            (received.saturating_sub(1)) as f64 / span
+            received.saturating_sub(1) as f64 / span
         } else {
             0.0
         },

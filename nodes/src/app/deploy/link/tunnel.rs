@@ -248,9 +248,8 @@ pub(super) fn run(spec: Spec, shared: Arc<Shared>) -> Result<LinkReport, LinkErr
         if let Err(e) = link.propagate() {
             errors.log("propagation", &e, now);
         }
-        match throttle.poll(now) {
-            Ok(_) => {}
-            Err(e) => errors.log("rate-limit relay", &e, now),
+        if let Err(e) = throttle.poll(now) {
+            errors.log("rate-limit relay", &e, now);
         }
         match watch.poll(now) {
             Ok(0) => {}

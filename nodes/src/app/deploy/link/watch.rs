@@ -3,9 +3,9 @@
 //! between them (lost across the link, or while it was down).
 //!
 //! These subscribers also create the run's services before anything else on the host does
-//! (the launcher starts the tunnel first), with the run's `[ports]` settings except that a
-//! small topic's services buffer up to [`LinkConfig::buffer`](crate::config::LinkConfig)
-//! samples per subscriber: the tunnel's own subscribers (the bridge's, and these) take that
+//! (the launcher starts the tunnel first), with the run's `[ports]` settings except that each
+//! subscriber may borrow a little more (see [`tunnel_ports`]) and a small topic's services
+//! buffer up to [`LinkConfig::buffer`](crate::config::LinkConfig) samples per subscriber: the tunnel's own subscribers (the bridge's, and these) take that
 //! depth, so the bursts in which samples come over a network do not overwrite them, while the
 //! nodes' subscribers keep the depth they ask for (a service admits any depth up to its own).
 
@@ -54,20 +54,26 @@ fn message_size(topic: &str) -> usize {
     }
 }
 
+/// Extra samples a subscriber may hold borrowed on a service the tunnel created.
+const EXTRA_BORROWS: usize = 2;
+
 /// The `[ports]` settings the tunnel creates the run's services with: small topics buffer at
-/// least `buffer` samples per subscriber (see the module docs).
+/// least `buffer` samples per subscriber (see the module docs), and every subscriber may hold
+/// [`EXTRA_BORROWS`] more samples borrowed than `[ports]` says. Samples from the other host come
+/// in bursts, so a consumer that keeps the newest sample while draining to the next
+/// (`Subscriber::latest`) holds three at once where one host rarely gives it two
+/// (regression: the planner on the station died with `ExceedsMaxBorrows` on `map`).
 pub fn tunnel_ports(
     ports: &runtime::ports::PortsConfig,
     buffer: usize,
 ) -> runtime::ports::PortsConfig {
     let mut p = ports.clone();
     for topic in RUN_TOPICS {
+        let s = ports.topic(topic);
+        let o = p.topics.entry(topic.to_string()).or_default();
+        o.subscriber_max_borrowed = Some(s.subscriber_max_borrowed + EXTRA_BORROWS);
         if message_size(topic) <= SMALL {
-            let depth = ports.topic(topic).subscriber_buffer.max(buffer);
-            p.topics
-                .entry(topic.to_string())
-                .or_default()
-                .subscriber_buffer = Some(depth);
+            o.subscriber_buffer = Some(s.subscriber_buffer.max(buffer));
         }
     }
     p
