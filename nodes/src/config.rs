@@ -48,6 +48,8 @@ pub struct Config {
     pub scenegen: crate::sim::scenegen::SceneGenConfig,
     /// MCAP recorder.
     pub recorder: runtime::recorder::RecorderConfig,
+    /// `vpsom run --link`: the tunnel to another host.
+    pub link: LinkConfig,
 }
 
 /// The RGB-D camera (paper: Kinect v2 on the FABO robot's head).
@@ -229,6 +231,64 @@ impl RunConfig {
             "needs run.lbv_cpu set to another CPU",
         )?;
         c.in_range("run.stop_grace_s", self.stop_grace_s, 0.1, 600.0)
+    }
+}
+
+/// `[link]`: the tunnel to another host (`vpsom run --link`, iceoryx2's link tunnel over
+/// zenoh); see `nodes/src/app/deploy/link/`.
+#[derive(Debug, Clone, PartialEq, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct LinkConfig {
+    /// zenoh configuration file (JSON5; endpoints, TLS, access control), "" = the built-in
+    /// one. `--zenoh-config` overrides it.
+    pub zenoh_config: String,
+    /// The tunnel thread wakes at least this often (ms), besides on data.
+    pub poll_ms: u64,
+    /// Before starting its nodes, wait up to this long (s) for the other host's tunnel to
+    /// bridge every topic; 0 = start at once.
+    pub wait_for_peer_s: f64,
+    /// At the end of a run, wait until no sample has come over the link for this long (ms)
+    /// before stopping the nodes, so the other host's last samples are recorded here.
+    pub quiet_ms: u64,
+    /// Cap on that wait (s).
+    pub drain_s: f64,
+    /// After the nodes stopped, keep the tunnel up this long (ms) so their last samples leave.
+    pub linger_ms: u64,
+    /// Samples the tunnel's own subscribers buffer per small topic (see `link::watch`).
+    pub buffer: usize,
+    /// Per-topic rate limit across the link (Hz, 0 = every sample), for the large topics
+    /// (`depth`, `map`).
+    pub max_hz: std::collections::BTreeMap<String, f64>,
+}
+
+/// Topics `[link.max_hz]` may limit: the large ones, which cross through a relay.
+pub const LINK_LIMITABLE: [&str; 2] = ["depth", "map"];
+
+impl Default for LinkConfig {
+    /// The `[link]` section of the built-in `config/default.toml`.
+    fn default() -> Self {
+        runtime::config::DEFAULTS.section("link")
+    }
+}
+
+impl LinkConfig {
+    fn validate(&self, c: &Checker) -> Result<(), ConfigError> {
+        c.count("link.poll_ms", self.poll_ms as usize, 1, 10_000)?;
+        c.in_range("link.wait_for_peer_s", self.wait_for_peer_s, 0.0, 86_400.0)?;
+        c.count("link.quiet_ms", self.quiet_ms as usize, 1, 600_000)?;
+        c.in_range("link.drain_s", self.drain_s, 0.0, 600.0)?;
+        c.count("link.linger_ms", self.linger_ms as usize, 0, 600_000)?;
+        c.count("link.buffer", self.buffer, 1, 256)?;
+        for (topic, &hz) in &self.max_hz {
+            c.require(
+                LINK_LIMITABLE.contains(&topic.as_str()),
+                "link.max_hz",
+                topic,
+                "only depth and map can be rate-limited",
+            )?;
+            c.in_range(&format!("link.max_hz.{topic}"), hz, 0.0, 1000.0)?;
+        }
+        Ok(())
     }
 }
 
@@ -418,7 +478,8 @@ impl Config {
         self.bench.validate(&c)?;
         self.sensing.validate(&c)?;
         self.scenegen.validate(&c)?;
-        self.recorder.validate(&c)
+        self.recorder.validate(&c)?;
+        self.link.validate(&c)
     }
 }
 

@@ -99,7 +99,8 @@ struct RunCmd {
     /// Output directory (default: out/<scene>-<planner>-<seed>).
     #[arg(long)]
     out: Option<PathBuf>,
-    /// Service namespace (default: run<pid>, so concurrent runs never collide).
+    /// Service namespace (default: run<pid>, so concurrent runs never collide; with --link,
+    /// `[ports] namespace`, the same on both hosts).
     #[arg(long)]
     ns: Option<String>,
     /// Run in one process on the lockstep host instead (no IPC; deterministic).
@@ -124,6 +125,16 @@ struct RunCmd {
     /// publishes; connect Foxglove to ws://HOST:PORT). PORT defaults to `[recorder] live_port`.
     #[arg(long, value_name = "PORT", num_args = 0..=1, conflicts_with = "lockstep")]
     live: Option<Option<u16>>,
+    /// Bridge this run's topics to a run on another host with the same --ns, through
+    /// iceoryx2's link tunnel over zenoh: zenoh endpoints, `listen:`/`connect:` or bare (an
+    /// unspecified address such as tcp/0.0.0.0:7447 is listened on, any other connected to).
+    /// See README "Running across two machines".
+    #[arg(long, value_name = "ENDPOINT", num_args = 1.., conflicts_with = "lockstep")]
+    link: Vec<String>,
+    /// zenoh configuration file for --link (JSON5: endpoints, TLS, access control; default
+    /// `[link] zenoh_config`, else built in); the --link endpoints replace its lists.
+    #[arg(long, value_name = "FILE", requires = "link")]
+    zenoh_config: Option<PathBuf>,
 }
 
 #[derive(Debug, Args)]
@@ -251,6 +262,8 @@ fn main() -> ExitCode {
         gbv_load: 0,
         nodes: Vec::new(),
         live: None,
+        link: Vec::new(),
+        zenoh_config: None,
     }));
     let result = match command {
         Command::Run(cmd) => run(config, cmd),
@@ -302,6 +315,7 @@ fn load_scene(name: &str) -> anyhow::Result<Scene> {
 
 fn run(config: Option<PathBuf>, cmd: RunCmd) -> anyhow::Result<ExitCode> {
     let (base, from) = Config::load_or_default(config.as_deref())?;
+    runtime::ports::set_domain(&base.ports.domain)?;
     let s = &cmd.session;
     let nodes = deploy::parse_nodes(&cmd.nodes).map_err(anyhow::Error::msg)?;
     // The sim needs a scene (`[sim] scene` by default); without it, a scene is only named to
@@ -322,9 +336,12 @@ fn run(config: Option<PathBuf>, cmd: RunCmd) -> anyhow::Result<ExitCode> {
     let out = cmd
         .out
         .unwrap_or_else(|| PathBuf::from(format!("out/{scene_label}-{}-{}", s.planner, s.seed)));
-    let ns = cmd
-        .ns
-        .unwrap_or_else(|| format!("run{}", std::process::id()));
+    // Hosts joined by --link must agree on the namespace: without --ns they take
+    // `[ports] namespace`, a run on its own host a fresh one.
+    let ns = cmd.ns.unwrap_or_else(|| match cmd.link.is_empty() {
+        true => format!("run{}", std::process::id()),
+        false => base.ports.namespace.clone(),
+    });
     eprintln!(
         "vpsom run: scene {} | planner {} | seed {} | camera {}x{} at {} Hz | time scale {} | \
          config {} | out {}{}{}",
@@ -376,6 +393,10 @@ fn run(config: Option<PathBuf>, cmd: RunCmd) -> anyhow::Result<ExitCode> {
             gbv_load: cmd.gbv_load,
             nodes,
             live: cmd.live.map(|p| p.unwrap_or(cfg.recorder.live_port)),
+            link: (!cmd.link.is_empty()).then(|| deploy::link::LinkArgs {
+                endpoints: cmd.link.clone(),
+                zenoh_config: cmd.zenoh_config.clone(),
+            }),
         };
         let exe = std::env::current_exe().context("locating the vpsom executable")?;
         let outcome = deploy::run(&args, &cfg, &exe)?;
@@ -696,6 +717,7 @@ fn node(
     (time_scale, gbv_load, live): (f64, usize, Option<u16>),
 ) -> anyhow::Result<ExitCode> {
     let cfg = deploy::run_config(&load_config(config.as_deref())?, &s.planner)?;
+    runtime::ports::set_domain(&cfg.ports.domain)?;
     let args = deploy::RunArgs {
         scene: s.scene,
         planner: s.planner,
@@ -707,6 +729,7 @@ fn node(
         gbv_load,
         nodes: vec![],
         live,
+        link: None,
     };
     match role {
         "sim" => deploy::sim_node(&args, &cfg)?,

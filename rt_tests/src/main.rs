@@ -1,13 +1,15 @@
 //! `vpsom-rt-tests`: does the runtime hold its latency budgets on this machine?
 //!
 //! Subcommands `wakeup` (executor wake-up latency, optionally against `cyclictest`), `ipc`
-//! (one-way latency of the ports vs raw iceoryx2), `e2e` (a live `vpsom run` pipeline, or
+//! (one-way latency of the ports vs raw iceoryx2; `--layer link`: across the link tunnel vs
+//! plain zenoh), `e2e` (a live `vpsom run` pipeline, or
 //! `--fake`) and `smoke` (all three, tiny, for CI). Each writes `report.md`, `report.json`, PNG
 //! histograms and `samples.mcap` to `--out`; `--stress` adds CPU and memory load; `--check`
 //! exits with status 2 naming every violated budget. See `rt_tests/README.md`.
 
 mod e2e;
 mod ipc;
+mod link;
 #[allow(unsafe_code)]
 mod payload;
 mod report;
@@ -90,6 +92,8 @@ enum Cmd {
     Smoke,
     #[command(hide = true)]
     IpcPub(IpcPubArgs),
+    #[command(hide = true)]
+    LinkPeer(LinkPeerArgs),
     #[command(hide = true)]
     StressWorker {
         #[arg(long)]
@@ -181,6 +185,10 @@ struct IpcArgs {
     /// Skip the raw iceoryx2 comparison.
     #[arg(long)]
     no_raw: bool,
+    /// `ports`: the runtime's ports vs raw iceoryx2 (shared memory); `link`: two iceoryx2
+    /// domains joined by the link tunnel over zenoh vs plain zenoh pub/sub.
+    #[arg(long, default_value = "ports", value_parser = ["ports", "link"])]
+    layer: String,
     #[command(flatten)]
     sched: SchedArgs,
 }
@@ -208,6 +216,28 @@ struct E2eArgs {
     /// Extra arguments for `vpsom run` (after `--`).
     #[arg(last = true)]
     run_args: Vec<String>,
+}
+
+#[derive(Debug, Args)]
+struct LinkPeerArgs {
+    #[arg(long)]
+    transport: String,
+    #[arg(long)]
+    ns: String,
+    #[arg(long)]
+    domain: String,
+    #[arg(long)]
+    payload: String,
+    #[arg(long)]
+    rate_hz: f64,
+    #[arg(long)]
+    count: u64,
+    #[arg(long)]
+    warmup: u64,
+    #[arg(long)]
+    buffer: usize,
+    #[arg(long)]
+    port: u16,
 }
 
 #[derive(Debug, Args)]
@@ -265,6 +295,20 @@ fn real_main() -> Result<std::process::ExitCode> {
             ipc::publisher(&wire, &sched)?;
             return Ok(std::process::ExitCode::SUCCESS);
         }
+        Cmd::LinkPeer(a) => {
+            link::peer(&link::PeerWire {
+                transport: a.transport.clone(),
+                ns: a.ns.clone(),
+                domain: a.domain.clone(),
+                payload: a.payload.clone(),
+                rate_hz: a.rate_hz,
+                count: a.count,
+                warmup: a.warmup,
+                buffer: a.buffer,
+                port: a.port,
+            })?;
+            return Ok(std::process::ExitCode::SUCCESS);
+        }
         Cmd::StressWorker { cpu, memory_mb } => {
             stress::worker(*cpu, *memory_mb)?;
             return Ok(std::process::ExitCode::SUCCESS);
@@ -308,7 +352,8 @@ fn real_main() -> Result<std::process::ExitCode> {
                 i.raw = false;
             }
             a.sched.apply(&mut i.sched);
-            vec![("ipc", cli.out.clone())]
+            let job = if a.layer == "link" { "ipc-link" } else { "ipc" };
+            vec![(job, cli.out.clone())]
         }
         Cmd::E2e(a) => {
             let e = &mut s.e2e;
@@ -351,6 +396,7 @@ fn real_main() -> Result<std::process::ExitCode> {
                 wakeup::run(&s.wakeup, job != "wakeup", &s.budgets, &dir, &mut log)
             }
             "ipc" => ipc::run(&s.ipc, &s.budgets, &dir, &mut log),
+            "ipc-link" => link::run(&s.ipc, &dir, &mut log),
             _ => e2e::run(&s.e2e, job == "e2e-fake", &s.budgets, &dir, &mut log),
         }?;
         log.finish()?;

@@ -161,6 +161,8 @@ pub struct IpcSettings {
     pub paced_duration_s: f64,
     /// Messages per flat-out case.
     pub flat_messages: u64,
+    /// Messages per flat-out case of `ipc --layer link` (the tunnel and plain zenoh).
+    pub link_flat_messages: u64,
     /// Every case's messages are split into this many rounds, each running all cases in turn.
     pub rounds: u32,
     /// Unmeasured messages sent first (connection set-up).
@@ -316,6 +318,12 @@ impl Settings {
             "ipc.flat_messages",
             i.flat_messages,
             "must be in [1, 10000000]",
+        )?;
+        c.require(
+            (1..=1_000_000).contains(&i.link_flat_messages),
+            "ipc.link_flat_messages",
+            i.link_flat_messages,
+            "must be in [1, 1000000]",
         )?;
         c.require(
             (1..=1000).contains(&i.rounds),

@@ -54,6 +54,10 @@ macro_rules! topic_settings {
             /// Middle part of every service name, `vpsom/<namespace>/<topic>`: runs with
             /// different namespaces never collide. `[A-Za-z0-9_-]`, 1..=48 characters.
             pub namespace: String,
+            /// The iceoryx2 domain: "" is iceoryx2's default; a name (`[A-Za-z0-9]`, up to 16)
+            /// gives its own shared-memory file prefix (see [`domain_prefix`]), so processes of
+            /// two domains on one machine share no shared memory.
+            pub domain: String,
             $(
                 #[doc = concat!("See [`TopicSettings::", stringify!($field), "`].")]
                 pub $field: $ty,
@@ -107,6 +111,7 @@ impl PortsConfig {
     pub fn validate(&self, c: &Checker) -> Result<(), ConfigError> {
         check_namespace(&self.namespace)
             .map_err(|why| c.range("ports.namespace", &self.namespace, why))?;
+        check_domain(&self.domain).map_err(|why| c.range("ports.domain", &self.domain, why))?;
         self.check_settings(c, "ports", &self.settings_with(&TopicOverride::default()))?;
         for (topic, o) in &self.topics {
             check_topic(topic).map_err(|why| c.range("ports.topics", topic, why))?;
@@ -165,6 +170,23 @@ pub(super) fn check_namespace(s: &str) -> Result<(), &'static str> {
     } else {
         Ok(())
     }
+}
+
+/// `Ok` if `s` names an iceoryx2 domain: empty (iceoryx2's default) or 1..=16 ASCII letters
+/// and digits (no separator, so no domain's prefix is the start of another's).
+pub fn check_domain(s: &str) -> Result<(), &'static str> {
+    if s.len() <= 16 && s.chars().all(|ch| ch.is_ascii_alphanumeric()) {
+        Ok(())
+    } else {
+        Err("must be empty or 1..=16 characters of [A-Za-z0-9]")
+    }
+}
+
+/// The iceoryx2 file prefix of `domain` (checked by [`check_domain`]): `None` for the default
+/// domain (iceoryx2's own `iox2_`), else `vpsom<domain>-`. It never starts with `iox2_`, and the
+/// `-` ends the name, so listing one domain's files never matches another's.
+pub fn domain_prefix(domain: &str) -> Option<String> {
+    (!domain.is_empty()).then(|| format!("vpsom{domain}-"))
 }
 
 /// A topic name: like a namespace, plus `/` between non-empty parts (e.g. `robot/state`).

@@ -44,6 +44,15 @@ pub enum ContextError {
         #[source]
         source: NodeCreationFailure,
     },
+    /// The iceoryx2 domain (`[ports] domain`) is not a valid name, or the process already
+    /// lives in another one.
+    #[error("iceoryx2 domain {domain:?}: {reason}")]
+    Domain {
+        /// The domain.
+        domain: String,
+        /// What is wrong.
+        reason: &'static str,
+    },
 }
 
 /// Why the two services of a topic (publish-subscribe and event) could not be opened or

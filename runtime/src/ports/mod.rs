@@ -37,7 +37,9 @@ mod error;
 mod publisher;
 mod subscriber;
 
-pub use config::{Overflow, PortsConfig, TopicOverride, TopicSettings};
+pub use config::{
+    Overflow, PortsConfig, TopicOverride, TopicSettings, check_domain, domain_prefix,
+};
 use config::{check_namespace, check_topic};
 pub use error::{
     ConnectError, ContextError, ListError, LoanError, PublisherError, ReceiveError, SendError,
@@ -72,10 +74,40 @@ impl fmt::Debug for PortContext {
     }
 }
 
+/// The process's iceoryx2 domain (`[ports] domain`), set once by [`set_domain`].
+static DOMAIN: std::sync::OnceLock<String> = std::sync::OnceLock::new();
+
+/// Puts every iceoryx2 node this process creates from now on into `domain` (`[ports] domain`;
+/// "" = iceoryx2's default). Call it once, before the first node, with the loaded
+/// configuration's value; a second call with another domain is an error (a process lives in
+/// one domain).
+pub fn set_domain(domain: &str) -> Result<(), ContextError> {
+    check_domain(domain).map_err(|reason| ContextError::Domain {
+        domain: domain.into(),
+        reason,
+    })?;
+    let set = DOMAIN.get_or_init(|| domain.to_string());
+    if set != domain {
+        return Err(ContextError::Domain {
+            domain: domain.into(),
+            reason: "this process already lives in another iceoryx2 domain",
+        });
+    }
+    Ok(())
+}
+
 /// The iceoryx2 configuration used by every node we create: iceoryx2's built-in defaults, never
-/// a file (see the module docs).
+/// a file (see the module docs), with the file prefix of the process's domain ([`set_domain`]).
 pub fn iceoryx2_config() -> iceoryx2::config::Config {
-    iceoryx2::config::Config::default()
+    let mut c = iceoryx2::config::Config::default();
+    if let Some(prefix) = DOMAIN.get().and_then(|d| domain_prefix(d)) {
+        // A checked domain gives a valid file name.
+        use iceoryx2::prelude::SemanticString as _;
+        if let Ok(p) = iceoryx2::prelude::FileName::new(prefix.as_bytes()) {
+            c.global.prefix = p;
+        }
+    }
+    c
 }
 
 /// Names of the existing services (any process) under `vpsom/<namespace>/`, sorted; each topic

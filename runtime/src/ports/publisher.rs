@@ -205,4 +205,23 @@ impl<T: Message> Loan<'_, T> {
         })?;
         Ok(Sent { seq, subscribers })
     }
+
+    /// Like [`Loan::send`] but keeps the header the caller wrote: for a relay that forwards
+    /// another publisher's sample (the link's rate limit), so consumers see the producer's
+    /// sequence number and stamps.
+    pub fn send_relayed(self) -> Result<Sent, SendError> {
+        let p = self.publisher;
+        let seq = self.sample.payload().header().seq;
+        let subscribers = self.sample.send().map_err(|source| SendError::Deliver {
+            service: p.services.name.clone(),
+            source,
+        })?;
+        p.seq.set(seq);
+        p.notifier.notify().map_err(|source| SendError::Notify {
+            service: p.services.name.clone(),
+            seq,
+            source,
+        })?;
+        Ok(Sent { seq, subscribers })
+    }
 }

@@ -34,7 +34,7 @@ fn inputs(role: &str) -> &'static [&'static str] {
 }
 
 /// Topics a role publishes.
-fn outputs(role: &str) -> &'static [&'static str] {
+pub(super) fn outputs(role: &str) -> &'static [&'static str] {
     match role {
         "sim" => &[
             topics::DEPTH,

@@ -50,6 +50,8 @@ pub struct RunArgs {
     pub nodes: Vec<&'static str>,
     /// The recorder serves the live view (Foxglove WebSocket) on this port.
     pub live: Option<u16>,
+    /// `--link`: bridge this run's topics to another host (see [`super::link`]).
+    pub link: Option<super::link::LinkArgs>,
 }
 
 impl RunArgs {
@@ -108,6 +110,8 @@ pub struct RunOutcome {
     pub mapper_frames: (u32, u32, u32),
     /// The planner's activity: `(LBV cycles, navigation goals published)`.
     pub planner_activity: (u64, u64),
+    /// What the tunnel to the other host moved (`--link`).
+    pub link: Option<super::link::LinkReport>,
     /// Why the run ended.
     pub reason: String,
     /// Whether a node failed for good.
@@ -142,6 +146,9 @@ impl RunOutcome {
             t += &format!("| samples received on {topic} (external) | {n} |\n");
             t += &format!("| invalid samples dropped on {topic} (external) | {invalid} |\n");
         }
+        if let Some(l) = &self.link {
+            t += &l.rows();
+        }
         t
     }
 }
@@ -175,6 +182,16 @@ pub fn run(args: &RunArgs, cfg: &Config, exe: &Path) -> anyhow::Result<RunOutcom
             launcher.stale_nodes_removed_at_start()
         );
     }
+    // The tunnel first: it creates the run's services (see `link::watch`).
+    let link = match &args.link {
+        Some(l) => Some(super::link::Link::start(
+            l,
+            &args.namespace,
+            &args.nodes,
+            cfg,
+        )?),
+        None => None,
+    };
     // Subscribe before the nodes start so no decision or truth sample is missed.
     let ctx = PortContext::with_namespace(&cfg.ports, "run", &args.namespace)?;
     let truth = ctx.subscriber::<RobotState>(topics::TRUTH)?;
@@ -184,6 +201,9 @@ pub fn run(args: &RunArgs, cfg: &Config, exe: &Path) -> anyhow::Result<RunOutcom
     let deadline = ctx.subscriber::<DeadlineEvent>(topics::DEADLINE)?;
     let nav = ctx.subscriber::<NavGoal>(topics::NAV_GOAL)?;
     let mut external = ExternalInputs::new(&ctx, &external::external_inputs(&args.nodes))?;
+    if let Some(l) = &link {
+        l.wait_for_peer(Duration::from_secs_f64(cfg.link.wait_for_peer_s), &stop);
+    }
     for &role in &args.nodes {
         launcher.spawn(ChildSpec {
             name: role.into(),
@@ -291,6 +311,9 @@ pub fn run(args: &RunArgs, cfg: &Config, exe: &Path) -> anyhow::Result<RunOutcom
         std::thread::sleep(Duration::from_millis(10));
     };
     eprintln!("\nstopping: {reason}");
+    if let Some(l) = &link {
+        l.quiesce();
+    }
     for (name, exit) in launcher.stop_all(Duration::from_secs_f64(cfg.run.stop_grace_s)) {
         if let Some(e) = exit {
             eprintln!("  {name}: {e}");
@@ -322,6 +345,14 @@ pub fn run(args: &RunArgs, cfg: &Config, exe: &Path) -> anyhow::Result<RunOutcom
     );
     // Count what the external inputs sent while the nodes stopped (the line is not news).
     let _ = external.poll(Instant::now())?;
+    // A failed tunnel does not cost the run its outputs: it is reported, the rest is written.
+    let link = link.and_then(|l| match l.finish() {
+        Ok(r) => Some(r),
+        Err(e) => {
+            eprintln!("link: {e}");
+            None
+        }
+    });
     // The planner's own account of its end (reason, explored, objects given up), if it left one.
     let outcome = std::fs::read(&outcome_file)
         .ok()
@@ -339,6 +370,7 @@ pub fn run(args: &RunArgs, cfg: &Config, exe: &Path) -> anyhow::Result<RunOutcom
             external: external.samples(),
             mapper_frames,
             planner_activity: (lbv_cycles, goals),
+            link,
             reason,
             failed,
         });
@@ -364,6 +396,7 @@ pub fn run(args: &RunArgs, cfg: &Config, exe: &Path) -> anyhow::Result<RunOutcom
         external: external.samples(),
         mapper_frames,
         planner_activity: (lbv_cycles, goals),
+        link,
         reason,
         failed,
     })

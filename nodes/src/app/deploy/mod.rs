@@ -12,6 +12,7 @@
 //! | `planner` | [`planner_node`]: the LBV on the deadline-monitored executor, GBV rounds and the GBV load on the worker pool |
 //! | `recorder` | [`recorder_node`]: every topic to `trace.mcap`, polled; [`recorder_setup`] |
 //! | `launch` | [`run`]: launch, watch and score a run; [`RunArgs`], [`RunOutcome`], [`run_config`] |
+//! | [`link`] | `--link`: this run's topics bridged to another host through iceoryx2's link tunnel over zenoh ([`link::Link`]) |
 //! | `external` | `--nodes`: [`parse_nodes`], [`external_inputs`] (what must come from a robot's drivers), [`ExternalInputs`] (publisher watch and report) |
 //!
 //! Time: the sim advances `time_scale` simulated seconds per wall second; every rate in the
@@ -22,6 +23,7 @@
 mod external;
 pub mod host;
 mod launch;
+pub mod link;
 mod mapper;
 mod planner;
 mod recorder;
