@@ -15,6 +15,7 @@
 //!   through a proxy this test cuts for a few seconds: both runs go on and terminate, B logs the
 //!   loss and the return, counts the gap and the samples lost, and depth frames cross at most
 //!   `[link.max_hz] depth` times a second.
+#![cfg(feature = "link")]
 
 use runtime::recorder::inspect::{self, TraceInfo};
 use runtime::recorder::schemas::topic;

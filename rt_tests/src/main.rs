@@ -9,6 +9,7 @@
 
 mod e2e;
 mod ipc;
+#[cfg(feature = "link")]
 mod link;
 #[allow(unsafe_code)]
 mod payload;
@@ -295,6 +296,7 @@ fn real_main() -> Result<std::process::ExitCode> {
             ipc::publisher(&wire, &sched)?;
             return Ok(std::process::ExitCode::SUCCESS);
         }
+        #[cfg(feature = "link")]
         Cmd::LinkPeer(a) => {
             link::peer(&link::PeerWire {
                 transport: a.transport.clone(),
@@ -309,6 +311,8 @@ fn real_main() -> Result<std::process::ExitCode> {
             })?;
             return Ok(std::process::ExitCode::SUCCESS);
         }
+        #[cfg(not(feature = "link"))]
+        Cmd::LinkPeer(_) => bail_no_link()?,
         Cmd::StressWorker { cpu, memory_mb } => {
             stress::worker(*cpu, *memory_mb)?;
             return Ok(std::process::ExitCode::SUCCESS);
@@ -396,7 +400,10 @@ fn real_main() -> Result<std::process::ExitCode> {
                 wakeup::run(&s.wakeup, job != "wakeup", &s.budgets, &dir, &mut log)
             }
             "ipc" => ipc::run(&s.ipc, &s.budgets, &dir, &mut log),
+            #[cfg(feature = "link")]
             "ipc-link" => link::run(&s.ipc, &dir, &mut log),
+            #[cfg(not(feature = "link"))]
+            "ipc-link" => bail_no_link(),
             _ => e2e::run(&s.e2e, job == "e2e-fake", &s.budgets, &dir, &mut log),
         }?;
         log.finish()?;
@@ -479,4 +486,13 @@ fn finish(
         bail!("no job");
     }
     Ok(())
+}
+
+/// `ipc --layer link` in a binary built without the tunnel.
+#[cfg(not(feature = "link"))]
+fn bail_no_link<T>() -> anyhow::Result<T> {
+    anyhow::bail!(
+        "ipc --layer link: vpsom-rt-tests was built without the `link` feature; build it with \
+         `cargo build --release -p rt_tests --features link`"
+    )
 }

@@ -21,10 +21,10 @@
 //! Depth frames stream from a second reader thread (they are in time order in the file), so memory
 //! stays bounded for long traces.
 
+use super::lockstep::stamp;
 use crate::config::Config;
 use crate::eval::{self, MatchParams};
 use crate::mapper::Mapper;
-use super::lockstep::stamp;
 use crate::planner::{self, PlannerInputs, Step, ViewPlanner};
 use crate::sim::Scene;
 use runtime::recorder::convert;

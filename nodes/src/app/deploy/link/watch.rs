@@ -9,6 +9,7 @@
 //! depth, so the bursts in which samples come over a network do not overwrite them, while the
 //! nodes' subscribers keep the depth they ask for (a service admits any depth up to its own).
 
+use super::TopicCount;
 use crate::app::topics;
 use runtime::ports::{PortContext, ReceiveError, Subscriber, SubscriberError};
 use shm_types::{
@@ -144,21 +145,6 @@ impl std::fmt::Debug for Watch {
             .field("topics", &self.topics.len())
             .finish_non_exhaustive()
     }
-}
-
-/// What one topic moved, for the report.
-#[derive(Debug, Clone, PartialEq, Eq)]
-pub struct TopicCount {
-    /// Topic.
-    pub topic: &'static str,
-    /// `true`: came from the other host.
-    pub inbound: bool,
-    /// Samples seen here (inbound: received over the link; outbound: published here).
-    pub samples: u64,
-    /// Inbound: sequence numbers that never arrived (0 for rate-limited topics).
-    pub lost: u64,
-    /// Samples that failed validation on receipt here.
-    pub invalid: u64,
 }
 
 impl Watch {
