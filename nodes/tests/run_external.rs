@@ -263,8 +263,14 @@ fn python_driver_frames_are_mapped_and_its_nan_pose_frame_is_counted() {
     let stdout = stop_run(child, &lines, reader, &mut log);
     println!("{stdout}");
     // The port drops the NaN-pose frame on receipt (the launcher's and the mapper's alike).
-    assert_eq!(row(&stdout, "samples received on depth (external)"), SENT - 1);
-    assert_eq!(row(&stdout, "invalid samples dropped on depth (external)"), 1);
+    assert_eq!(
+        row(&stdout, "samples received on depth (external)"),
+        SENT - 1
+    );
+    assert_eq!(
+        row(&stdout, "invalid samples dropped on depth (external)"),
+        1
+    );
     assert_eq!(
         row(&stdout, "samples received on detections (external)"),
         SENT

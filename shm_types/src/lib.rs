@@ -24,6 +24,7 @@
 //! | `messages.rs` | the message types, their capacities and enum values, `validate()` |
 //! | `message.rs` | [`Message`], [`init_zeroed`], [`init_reused`] |
 //! | `validate.rs` | [`Validate`], [`ValidationError`] |
+//! | `health.rs` | [`NodeHealth`]: every node's heartbeat and input counts (the `health` topic) |
 //! | `classes.rs` | the COCO class table |
 //! | `contract/` | [`contract`]: every topic's service name, type name, size, alignment, field offsets and units, and the generated C header and Python module |
 //! | `include/vpsom_topics.h`, `python/vpsom_topics.py` | generated from [`contract`], committed |
@@ -60,11 +61,13 @@
 
 mod classes;
 pub mod contract;
+mod health;
 mod message;
 mod messages;
 mod validate;
 
 pub use classes::{COCO_CLASSES, ClassId, class_id, class_name, is_background_class};
+pub use health::{HEALTH_NODE_LEN, HEALTH_TOPIC_LEN, InputHealth, MAX_HEALTH_INPUTS, NodeHealth};
 pub use message::{Message, init_reused, init_zeroed};
 pub use messages::*;
 pub use validate::{Validate, ValidationError};

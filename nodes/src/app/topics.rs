@@ -25,3 +25,6 @@ pub const NECK_GOAL: &str = "neck/goal";
 pub const DECISION: &str = "planner/decision";
 /// `DeadlineEvent` from the real-time threads.
 pub const DEADLINE: &str = "deadline";
+/// `NodeHealth` from every node host: heartbeat and input counts (the launcher's liveness
+/// check, and the run summary's per-topic invalid and overflow counts).
+pub const HEALTH: &str = "health";

@@ -360,6 +360,7 @@ mod tests {
             .collect();
         assert_eq!(seqs, vec![5, 6]);
         assert_eq!(sub.gaps(), 3, "seqs 2..=4 were overwritten");
+        assert_eq!(sub.received(), 3, "seqs 1, 5 and 6 were received");
     }
 
     #[test]

@@ -186,7 +186,10 @@ impl ExternalInputs {
 
     /// Per topic: `(topic, valid samples seen, invalid samples dropped)` so far.
     pub fn samples(&self) -> Vec<(&'static str, u64, u64)> {
-        self.watched.iter().map(|w| (w.0, w.2, w.1.invalid())).collect()
+        self.watched
+            .iter()
+            .map(|w| (w.0, w.2, w.1.invalid()))
+            .collect()
     }
 
     /// Drain every watched topic; then, if a topic has no publisher, say which (at most every

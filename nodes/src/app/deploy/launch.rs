@@ -8,13 +8,14 @@
 //! written, scoring is skipped and the outcome says so.
 
 use super::external::{self, ExternalInputs};
+use super::health::{HealthWatch, InputAccount};
 use super::host;
 use crate::app::{lockstep, topics};
 use crate::config::Config;
 use crate::eval::{self, MatchParams, RunInfo, SessionLog};
 use crate::sim::Scene;
 use anyhow::Context;
-use runtime::launcher::{ChildEvent, ChildSpec, Launcher};
+use runtime::launcher::{ChildEvent, ChildSpec, Launcher, Liveness};
 use runtime::ports::PortContext;
 use shm_types::{
     DeadlineEvent, FrameVisibility, NavGoal, ObjectMap, PlannerDecision, RobotState, boxed_zeroed,
@@ -100,6 +101,13 @@ pub struct RunOutcome {
     /// The mapper's account of the depth frames it received, from its last map:
     /// `(integrated, rejected as invalid, skipped for want of matching detections)`.
     pub mapper_frames: (u32, u32, u32),
+    /// Every node's inputs from its heartbeats (`health`): received, invalid and overflow
+    /// counts per topic, summed over the node's restarts.
+    pub inputs: Vec<InputAccount>,
+    /// What the launcher noticed about the nodes (deaths, hangs, restarts), in order.
+    pub node_events: Vec<String>,
+    /// Heartbeats the launcher received, and dropped as invalid.
+    pub heartbeats: (u64, u64),
     /// Why the run ended.
     pub reason: String,
     /// Whether a node failed for good.
@@ -131,7 +139,22 @@ impl RunOutcome {
             t += &format!("| samples received on {topic} (external) | {n} |\n");
             t += &format!("| invalid samples dropped on {topic} (external) | {invalid} |\n");
         }
-        t
+        for a in &self.inputs {
+            t += &format!(
+                "| {} ← {}: received / invalid / overflow | {} / {} / {} |\n",
+                a.node, a.topic, a.received, a.invalid, a.overflow
+            );
+        }
+        t += &format!(
+            "| heartbeats received / invalid (launcher ← health) | {} / {} |\n",
+            self.heartbeats.0, self.heartbeats.1
+        );
+        let events = if self.node_events.is_empty() {
+            "none".to_string()
+        } else {
+            self.node_events.join("; ")
+        };
+        t + &format!("| node faults (deaths, hangs, restarts) | {events} |\n")
     }
 }
 
@@ -173,6 +196,12 @@ pub fn run(args: &RunArgs, cfg: &Config, exe: &Path) -> anyhow::Result<RunOutcom
     let deadline = ctx.subscriber::<DeadlineEvent>(topics::DEADLINE)?;
     let nav = ctx.subscriber::<NavGoal>(topics::NAV_GOAL)?;
     let mut external = ExternalInputs::new(&ctx, &external::external_inputs(&args.nodes))?;
+    let mut health = HealthWatch::new(&ctx)?;
+    let mut node_events = Vec::new();
+    let liveness = Liveness {
+        timeout: Duration::from_secs_f64(cfg.run.hang_timeout_s),
+        startup: Duration::from_secs_f64(cfg.run.start_timeout_s),
+    };
     for &role in &args.nodes {
         launcher.spawn(ChildSpec {
             name: role.into(),
@@ -180,6 +209,7 @@ pub fn run(args: &RunArgs, cfg: &Config, exe: &Path) -> anyhow::Result<RunOutcom
             args: args.child_args(role),
             max_restarts: cfg.run.max_restarts,
             inherit_stdout: false,
+            liveness: Some(liveness),
         })?;
     }
     let start = Instant::now();
@@ -228,8 +258,10 @@ pub fn run(args: &RunArgs, cfg: &Config, exe: &Path) -> anyhow::Result<RunOutcom
             // No sim: the robot's clock is the run's.
             sim_ns = sim_ns.max(t);
         }
+        health.poll(&mut launcher)?;
         for ev in launcher.poll() {
             eprintln!("\n{ev}");
+            node_events.push(ev.to_string());
             match ev {
                 ChildEvent::Failed { .. } => failed = true,
                 ChildEvent::Finished { ref name } if name == "planner" && final_state.is_none() => {
@@ -283,7 +315,8 @@ pub fn run(args: &RunArgs, cfg: &Config, exe: &Path) -> anyhow::Result<RunOutcom
             eprintln!("  {name}: {e}");
         }
     }
-    // Read what arrived while the nodes stopped (the final map in particular).
+    // Read what arrived while the nodes stopped (the final map, the last heartbeats).
+    health.poll(&mut launcher)?;
     if let Some(m) = map_sub.latest()? {
         map.copy_from(&m);
     }
@@ -325,6 +358,9 @@ pub fn run(args: &RunArgs, cfg: &Config, exe: &Path) -> anyhow::Result<RunOutcom
             objects,
             external: external.samples(),
             mapper_frames,
+            inputs: health.accounts(),
+            heartbeats: health.heartbeats(),
+            node_events,
             reason,
             failed,
         });
@@ -349,6 +385,9 @@ pub fn run(args: &RunArgs, cfg: &Config, exe: &Path) -> anyhow::Result<RunOutcom
         objects,
         external: external.samples(),
         mapper_frames,
+        inputs: health.accounts(),
+        heartbeats: health.heartbeats(),
+        node_events,
         reason,
         failed,
     })

@@ -1,6 +1,7 @@
 //! `vpsom node mapper`: the mapper on the process's main thread, woken by depth frames.
 
 use super::RunArgs;
+use super::health::report_input;
 use super::host::{self, Flow, HostError, NodeHost, Pace};
 use crate::app::topics;
 use crate::config::Config;
@@ -8,7 +9,7 @@ use crate::mapper::{Mapper, MapperError};
 use runtime::clock::MonotonicClock;
 use runtime::executor::{ExecutorConfig, SchedPolicy};
 use runtime::ports::{PortContext, Publisher, Received, Subscriber};
-use shm_types::{DepthFrame, Detections, ObjectMap, OccupancyGrid, RobotState};
+use shm_types::{DepthFrame, Detections, NodeHealth, ObjectMap, OccupancyGrid, RobotState};
 use std::sync::atomic::{AtomicBool, Ordering};
 use std::time::{Duration, Instant};
 
@@ -52,7 +53,8 @@ struct MapperHost {
     counts: FrameCounts,
     /// Simulated time of the newest frame.
     last_t: u64,
-    _ctx: PortContext,
+    ctx: PortContext,
+    health_period: Duration,
 }
 
 impl MapperHost {
@@ -73,7 +75,8 @@ impl MapperHost {
             pending: None,
             counts: FrameCounts::default(),
             last_t: 0,
-            _ctx: ctx,
+            ctx,
+            health_period: Duration::from_secs_f64(1.0 / cfg.run.health_hz),
         })
     }
 
@@ -161,6 +164,16 @@ impl NodeHost for MapperHost {
             self.next_map = t + self.map_period;
         }
         Ok(Flow::Busy)
+    }
+
+    fn heartbeat(&self) -> Option<(&PortContext, Duration)> {
+        Some((&self.ctx, self.health_period))
+    }
+
+    fn inputs(&self, h: &mut NodeHealth) {
+        report_input(h, topics::DEPTH, &self.depth);
+        report_input(h, topics::DETECTIONS, &self.dets);
+        report_input(h, topics::STATE, &self.state_sub);
     }
 
     /// On a clean stop, one last map: what was integrated after the last periodic one, and the

@@ -2,6 +2,7 @@
 //! recorder's view of a scene ([`recorder_setup`], also used by the lockstep host).
 
 use super::RunArgs;
+use super::health::report_input;
 use super::host::{self, Flow, HostError, NodeHost, Pace};
 use crate::app::topics;
 use crate::config::Config;
@@ -9,7 +10,8 @@ use crate::sim::Scene;
 use runtime::ports::{PortContext, Subscriber};
 use runtime::recorder::{MountGeometry, Recorder, RecorderHandle, RecorderSetup, TruthBox};
 use shm_types::{
-    DeadlineEvent, DepthFrame, NavGoal, NeckGoal, ObjectMap, PlannerDecision, RobotState,
+    DeadlineEvent, DepthFrame, NavGoal, NeckGoal, NodeHealth, ObjectMap, PlannerDecision,
+    RobotState,
 };
 use std::sync::atomic::AtomicBool;
 use std::time::Duration;
@@ -67,7 +69,8 @@ struct RecorderHost {
     nav: Subscriber<NavGoal>,
     neck: Subscriber<NeckGoal>,
     deadline: Subscriber<DeadlineEvent>,
-    _ctx: PortContext,
+    ctx: PortContext,
+    health_period: Duration,
 }
 
 impl RecorderHost {
@@ -98,7 +101,8 @@ impl RecorderHost {
             nav: ctx.subscriber(topics::NAV_GOAL)?,
             neck: ctx.subscriber(topics::NECK_GOAL)?,
             deadline: ctx.subscriber(topics::DEADLINE)?,
-            _ctx: ctx,
+            ctx,
+            health_period: Duration::from_secs_f64(1.0 / cfg.run.health_hz),
         })
     }
 }
@@ -140,6 +144,21 @@ impl NodeHost for RecorderHost {
             any = true;
         }
         Ok(if any { Flow::Busy } else { Flow::Idle })
+    }
+
+    fn heartbeat(&self) -> Option<(&PortContext, Duration)> {
+        Some((&self.ctx, self.health_period))
+    }
+
+    fn inputs(&self, h: &mut NodeHealth) {
+        report_input(h, topics::DEPTH, &self.depth);
+        report_input(h, topics::STATE, &self.state);
+        report_input(h, topics::TRUTH, &self.truth);
+        report_input(h, topics::MAP, &self.map);
+        report_input(h, topics::DECISION, &self.decision);
+        report_input(h, topics::NAV_GOAL, &self.nav);
+        report_input(h, topics::NECK_GOAL, &self.neck);
+        report_input(h, topics::DEADLINE, &self.deadline);
     }
 
     fn finish(self) -> Result<(), HostError> {
