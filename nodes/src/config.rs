@@ -185,9 +185,9 @@ pub struct RunConfig {
     pub hang_timeout_s: f64,
     /// Longest wait for a (re)started node's first heartbeat before it counts as hung, wall s.
     pub start_timeout_s: f64,
-    /// The mapper saves its newest published map at most this often (wall s); a restarted
-    /// mapper resumes from it. 0 = no checkpoint (a restarted mapper starts empty).
-    pub checkpoint_s: f64,
+    /// A restarted mapper resumes from the last map it published (the launcher hands its
+    /// newest copy over on `map/resume`); `false` = it starts empty.
+    pub resume_map: bool,
 }
 
 impl Default for RunConfig {
@@ -246,7 +246,6 @@ impl RunConfig {
             self.hang_timeout_s,
             "must span at least two heartbeats (run.health_hz)",
         )?;
-        c.in_range("run.checkpoint_s", self.checkpoint_s, 0.0, 3600.0)?;
         c.in_range("run.stop_grace_s", self.stop_grace_s, 0.1, 600.0)
     }
 }

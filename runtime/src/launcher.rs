@@ -18,6 +18,11 @@ use std::path::PathBuf;
 use std::process::{Child, Command, ExitStatus, Stdio};
 use std::time::{Duration, Instant};
 
+/// Environment variable every child is started with: how many times it has been restarted
+/// (`0` at the first start). A child that can continue an earlier incarnation's work (the
+/// mapper, from its last map) reads it.
+pub const RESTART_ENV: &str = "VPSOM_RESTART";
+
 /// How to start one supervised process.
 #[derive(Debug, Clone)]
 pub struct ChildSpec {
@@ -243,7 +248,7 @@ impl Launcher {
 
     /// Start a supervised child.
     pub fn spawn(&mut self, spec: ChildSpec) -> Result<u32, LaunchError> {
-        let child = start(&spec)?;
+        let child = start(&spec, 0)?;
         let pid = child.id();
         self.children.push(Supervised {
             spec,
@@ -351,7 +356,7 @@ impl Launcher {
                 continue;
             }
             sup.restarts += 1;
-            match start(&sup.spec) {
+            match start(&sup.spec, sup.restarts) {
                 Ok(child) => {
                     sup.child = Some(child);
                     sup.started = Instant::now();
@@ -419,9 +424,10 @@ impl Drop for Launcher {
     }
 }
 
-fn start(spec: &ChildSpec) -> Result<Child, LaunchError> {
+fn start(spec: &ChildSpec, restarts: u32) -> Result<Child, LaunchError> {
     Command::new(&spec.program)
         .args(&spec.args)
+        .env(RESTART_ENV, restarts.to_string())
         .stdin(Stdio::null())
         .stdout(if spec.inherit_stdout {
             Stdio::inherit()

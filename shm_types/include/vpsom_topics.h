@@ -37,6 +37,7 @@
 #define VPSOM_TOPIC_SIM_VISIBILITY    "sim/visibility" /* vpsom_FrameVisibility (vpsom::FrameVisibility); from sim only: ground-truth visibility per rendered frame (evaluation; absent on a robot) */
 #define VPSOM_TOPIC_NAV_GRID          "nav/grid" /* vpsom_OccupancyGrid (vpsom::OccupancyGrid); from sim (robot: navigation stack): navigation occupancy grid (obstacles only) */
 #define VPSOM_TOPIC_MAP               "map" /* vpsom_ObjectMap (vpsom::ObjectMap); from mapper: sparse object map */
+#define VPSOM_TOPIC_MAP_RESUME        "map/resume" /* vpsom_ObjectMap (vpsom::ObjectMap); from launcher: the newest map, handed to a restarted mapper (history 1) */
 #define VPSOM_TOPIC_MAP_GRID          "map/grid" /* vpsom_OccupancyGrid (vpsom::OccupancyGrid); from mapper: exploration grid built from depth (with unknown cells) */
 #define VPSOM_TOPIC_NAV_GOAL          "nav/goal" /* vpsom_NavGoal (vpsom::NavGoal); from planner: chassis goal (consumed by the base controller) */
 #define VPSOM_TOPIC_NECK_GOAL         "neck/goal" /* vpsom_NeckGoal (vpsom::NeckGoal); from planner: neck goal relative to the base (consumed by the neck controller) */

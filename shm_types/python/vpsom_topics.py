@@ -480,6 +480,7 @@ TOPICS = {
     "sim/visibility": FrameVisibility,
     "nav/grid": OccupancyGrid,
     "map": ObjectMap,
+    "map/resume": ObjectMap,
     "map/grid": OccupancyGrid,
     "nav/goal": NavGoal,
     "neck/goal": NeckGoal,

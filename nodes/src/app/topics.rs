@@ -15,6 +15,9 @@ pub const VISIBILITY: &str = "sim/visibility";
 pub const NAV_GRID: &str = "nav/grid";
 /// `ObjectMap` from the mapper.
 pub const MAP: &str = "map";
+/// `ObjectMap` from the launcher to a restarted mapper: the newest map the mapper published
+/// before it died (one sample per restart, kept as history for the late-joining mapper).
+pub const MAP_RESUME: &str = "map/resume";
 /// Exploration `OccupancyGrid` (from depth) from the mapper.
 pub const MAP_GRID: &str = "map/grid";
 /// `NavGoal` from the planner.

@@ -341,6 +341,12 @@ pub(super) static TOPICS: &[Topic] = &[
         doc: "sparse object map",
     },
     Topic {
+        topic: "map/resume",
+        payload: "ObjectMap",
+        producer: "launcher",
+        doc: "the newest map, handed to a restarted mapper (history 1)",
+    },
+    Topic {
         topic: "map/grid",
         payload: "OccupancyGrid",
         producer: "mapper",

@@ -197,6 +197,8 @@ pub fn run(args: &RunArgs, cfg: &Config, exe: &Path) -> anyhow::Result<RunOutcom
     let nav = ctx.subscriber::<NavGoal>(topics::NAV_GOAL)?;
     let mut external = ExternalInputs::new(&ctx, &external::external_inputs(&args.nodes))?;
     let mut health = HealthWatch::new(&ctx)?;
+    // A restarted mapper resumes from the newest map heard here (`[run] resume_map`).
+    let resume = ctx.publisher::<ObjectMap>(topics::MAP_RESUME)?;
     let mut node_events = Vec::new();
     let liveness = Liveness {
         timeout: Duration::from_secs_f64(cfg.run.hang_timeout_s),
@@ -259,9 +261,26 @@ pub fn run(args: &RunArgs, cfg: &Config, exe: &Path) -> anyhow::Result<RunOutcom
             sim_ns = sim_ns.max(t);
         }
         health.poll(&mut launcher)?;
+        // Late joiners (a restarting mapper) get the history only from the publisher's side.
+        resume.update_connections()?;
         for ev in launcher.poll() {
             eprintln!("\n{ev}");
             node_events.push(ev.to_string());
+            if let ChildEvent::Restarted { ref name, .. } = ev
+                && name == "mapper"
+                && cfg.run.resume_map
+            {
+                let mut m = resume.loan()?;
+                m.copy_from(&map);
+                m.send(runtime::ports::Stamp {
+                    source_ns: 0,
+                    sim_ns: map.header.sim_time_ns,
+                })?;
+                eprintln!(
+                    "handed the restarted mapper its last map: {} objects",
+                    map.objects().len()
+                );
+            }
             match ev {
                 ChildEvent::Failed { .. } => failed = true,
                 ChildEvent::Finished { ref name } if name == "planner" && final_state.is_none() => {
