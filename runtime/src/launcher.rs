@@ -227,9 +227,13 @@ impl Launcher {
     /// crashed processes of earlier runs.
     pub fn new(name: &str, config: &iceoryx2::config::Config) -> Result<Self, LaunchError> {
         let node_name = NodeName::new(name).map_err(|e| LaunchError::Node(format!("{e:?}")))?;
+        // The dead nodes are removed below, where they are counted, not silently by the
+        // node's creation.
+        let mut config = config.clone();
+        config.global.node.cleanup_dead_nodes_on_creation = false;
         let node = NodeBuilder::new()
             .name(&node_name)
-            .config(config)
+            .config(&config)
             .signal_handling_mode(SignalHandlingMode::Disabled)
             .create::<ipc::Service>()
             .map_err(|e| LaunchError::Node(format!("{e:?}")))?;

@@ -30,6 +30,9 @@
 /* Full service name; namespace and topic are string literals. */
 #define VPSOM_SERVICE(namespace, topic) VPSOM_SERVICE_ROOT "/" namespace "/" topic
 #define VPSOM_USER_HEADER_TYPE_NAME "()"
+/* iceoryx2 global.root-path and global.prefix of a run: printf formats of the uid. */
+#define VPSOM_IOX2_ROOT_FMT "/tmp/vpsom-iox2-u%u/"
+#define VPSOM_IOX2_PREFIX_FMT "vpsom_u%u_"
 #define VPSOM_TOPIC_DEPTH             "depth" /* vpsom_DepthFrame (vpsom::DepthFrame); from sim (robot: depth camera driver): depth image, u16 mm, with intrinsics and the estimated world_from_camera pose */
 #define VPSOM_TOPIC_DETECTIONS        "detections" /* vpsom_Detections (vpsom::Detections); from sim (robot: object detector): detections of one depth frame (frame_seq = that frame's header.seq) */
 #define VPSOM_TOPIC_ROBOT_STATE       "robot/state" /* vpsom_RobotState (vpsom::RobotState); from sim (robot: base controller + localization): estimated base pose, neck angles, odometry covariance, navigation status */

@@ -24,6 +24,17 @@ def service_name(namespace: str, topic: str) -> str:
     return f"{SERVICE_ROOT}/{namespace}/{topic}"
 
 
+def iceoryx2_config(iox2, uid=None):
+    """The iceoryx2 config a run of user `uid` (default: this process's) uses: its own
+    root directory and prefix (services are owner-only). Pass it to NodeBuilder.config()."""
+    import os
+    uid = os.geteuid() if uid is None else uid
+    c = iox2.config.default()
+    c.global_cfg.root_path = iox2.Path.new(f"/tmp/vpsom-iox2-u{uid}/")
+    c.global_cfg.prefix = iox2.FileName.new(f"vpsom_u{uid}_")
+    return c
+
+
 # ---- capacities and enum values ----
 MAX_WIDTH = 640
 MAX_HEIGHT = 480

@@ -44,6 +44,12 @@
 //!   .publish_subscribe(vpsom_topics.DepthFrame)`: the class's `type_name()` gives iceoryx2 the
 //!   type name, ctypes the size and alignment.
 //!
+//! The node must use the run's iceoryx2 instance: every user has its own
+//! ([`contract::iceoryx2_root_path`], [`contract::iceoryx2_prefix`]; Python:
+//! `NodeBuilder.new().config(vpsom_topics.iceoryx2_config(iox2))`, C/C++: `global.root-path`
+//! and `global.prefix` from `VPSOM_IOX2_ROOT_FMT` / `VPSOM_IOX2_PREFIX_FMT` with the uid), and
+//! only that user's processes can open it.
+//!
 //! What the service must match: payload type name `vpsom::<Name>`, `size_of`, `align_of`, no
 //! user header. Start `vpsom run` first and *open* the services (our nodes create them with the
 //! `[ports]` settings of `config/default.toml`; a service created first by a driver with

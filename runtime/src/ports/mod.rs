@@ -27,11 +27,13 @@
 //! | file | content |
 //! |---|---|
 //! | `mod.rs` | [`PortContext`] (node, naming, a topic's two services), [`list_services`] |
+//! | [`access`] | per-user iceoryx2 root directory and prefix: who may open a run's services |
 //! | `config.rs` | [`PortsConfig`] (`[ports]`), [`TopicOverride`], [`TopicSettings`], [`Overflow`] |
 //! | `publisher.rs` | [`Publisher`], [`Loan`], [`Stamp`], [`Sent`] |
 //! | `subscriber.rs` | [`Subscriber`], [`Received`] |
 //! | `error.rs` | one error type per operation, each keeping iceoryx2's error as its source |
 
+pub mod access;
 mod config;
 mod error;
 mod publisher;
@@ -73,9 +75,12 @@ impl fmt::Debug for PortContext {
 }
 
 /// The iceoryx2 configuration used by every node we create: iceoryx2's built-in defaults, never
-/// a file (see the module docs).
+/// a file (see the module docs), with the calling user's own root directory (made `0700`) and
+/// prefix ([`access`]).
 pub fn iceoryx2_config() -> iceoryx2::config::Config {
-    iceoryx2::config::Config::default()
+    let uid = crate::os::euid();
+    access::ensure_private_root(uid);
+    access::config_for_user(uid)
 }
 
 /// Names of the existing services (any process) under `vpsom/<namespace>/`, sorted; each topic

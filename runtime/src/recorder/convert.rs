@@ -876,6 +876,45 @@ pub(super) fn deadline(e: &DeadlineEvent, out: &mut Vec<u8>) {
     to(out, &msg);
 }
 
+#[derive(Debug, Serialize)]
+struct InputJson<'a> {
+    topic: &'a str,
+    received: u64,
+    invalid: u64,
+    overflow: u64,
+}
+
+#[derive(Debug, Serialize)]
+struct HealthJson<'a> {
+    #[serde(flatten)]
+    header: Hdr,
+    node: &'a str,
+    pid: u32,
+    steps: u64,
+    inputs: Vec<InputJson<'a>>,
+}
+
+/// `vpsom.NodeHealth`.
+pub(super) fn health(h: &shm_types::NodeHealth, out: &mut Vec<u8>) {
+    let msg = HealthJson {
+        header: hdr(&h.header),
+        node: h.node_name(),
+        pid: h.pid,
+        steps: h.steps,
+        inputs: h
+            .inputs()
+            .iter()
+            .map(|i| InputJson {
+                topic: i.topic_name(),
+                received: i.received,
+                invalid: i.invalid,
+                overflow: i.overflow,
+            })
+            .collect(),
+    };
+    to(out, &msg);
+}
+
 /// `vpsom.LatencySummary`.
 pub(super) fn latency(s: &LatencySummary, out: &mut Vec<u8>) {
     to(out, s);

@@ -65,6 +65,7 @@
 //! | `/planner/decisions` | `vpsom.PlannerDecision` | same |
 //! | `/planner/nav_goal`, `/planner/neck_goal` | `vpsom.NavGoal`, `vpsom.NeckGoal` | `record_*_goal` |
 //! | `/runtime/deadline` | `vpsom.DeadlineEvent` | [`RecorderHandle::record_deadline`] |
+//! | `/runtime/health` | `vpsom.NodeHealth` | [`RecorderHandle::record_health`] |
 //! | `/runtime/latency` | `vpsom.LatencySummary` | [`RecorderHandle::record_latency`] |
 //! | `/log` | `foxglove.Log` | [`RecorderHandle::log`] |
 //! | `/metrics` | `vpsom.Metrics` | [`RecorderHandle::record_metrics`] |
@@ -85,8 +86,8 @@ use crossbeam::channel::{Receiver, Sender, TrySendError};
 use crossbeam::queue::ArrayQueue;
 use serde::{Deserialize, Serialize};
 use shm_types::{
-    DeadlineEvent, DepthFrame, NavGoal, NeckGoal, ObjectMap, PlannerDecision, RobotState,
-    ZeroValid, boxed_zeroed,
+    DeadlineEvent, DepthFrame, NavGoal, NeckGoal, NodeHealth, ObjectMap, PlannerDecision,
+    RobotState, ZeroValid, boxed_zeroed,
 };
 use std::path::{Path, PathBuf};
 use std::sync::Arc;
@@ -330,6 +331,8 @@ pub enum Kind {
     NeckGoal,
     /// Deadline-monitor events.
     Deadline,
+    /// Node heartbeats with their input counts.
+    Health,
     /// Latency summaries.
     Latency,
     /// Log lines.
@@ -340,7 +343,7 @@ pub enum Kind {
 
 impl Kind {
     /// Every kind, in index order.
-    pub const ALL: [Kind; 11] = [
+    pub const ALL: [Kind; 12] = [
         Kind::Depth,
         Kind::State,
         Kind::TrueState,
@@ -349,6 +352,7 @@ impl Kind {
         Kind::NavGoal,
         Kind::NeckGoal,
         Kind::Deadline,
+        Kind::Health,
         Kind::Latency,
         Kind::Log,
         Kind::Metrics,
@@ -366,6 +370,7 @@ impl Kind {
             Kind::NavGoal => topic::NAV_GOAL,
             Kind::NeckGoal => topic::NECK_GOAL,
             Kind::Deadline => topic::DEADLINE,
+            Kind::Health => topic::HEALTH,
             Kind::Latency => topic::LATENCY,
             Kind::Log => topic::LOG,
             Kind::Metrics => topic::METRICS,
@@ -468,6 +473,7 @@ enum Msg {
     NavGoal(NavGoal),
     NeckGoal(NeckGoal),
     Deadline(DeadlineEvent),
+    Health(Box<NodeHealth>),
     Latency(LatencySummary),
     Log {
         time_ns: u64,
@@ -641,6 +647,11 @@ impl RecorderHandle {
     /// Record a deadline-monitor event (`/runtime/deadline`).
     pub fn record_deadline(&self, e: &DeadlineEvent) {
         self.push(Kind::Deadline, Msg::Deadline(*e));
+    }
+
+    /// Record a node's heartbeat and input counts (`/runtime/health`), a few per second.
+    pub fn record_health(&self, h: &NodeHealth) {
+        self.push(Kind::Health, Msg::Health(Box::new(*h)));
     }
 
     /// Record a latency summary (`/runtime/latency`), about once a second.

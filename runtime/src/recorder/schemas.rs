@@ -36,6 +36,8 @@ pub mod topic {
     pub const NECK_GOAL: &str = "/planner/neck_goal";
     /// Deadline-monitor events.
     pub const DEADLINE: &str = "/runtime/deadline";
+    /// Node heartbeats with their per-input counts.
+    pub const HEALTH: &str = "/runtime/health";
     /// Per-node latency summaries.
     pub const LATENCY: &str = "/runtime/latency";
     /// Log lines.
@@ -68,6 +70,7 @@ pub fn channels() -> Vec<(&'static str, &'static str, Value)> {
         (NAV_GOAL, "vpsom.NavGoal", nav_goal()),
         (NECK_GOAL, "vpsom.NeckGoal", neck_goal()),
         (DEADLINE, "vpsom.DeadlineEvent", deadline_event()),
+        (HEALTH, "vpsom.NodeHealth", node_health()),
         (LATENCY, "vpsom.LatencySummary", latency_summary()),
         (LOG, "foxglove.Log", log()),
         (METRICS, "vpsom.Metrics", metrics()),
@@ -481,6 +484,29 @@ pub fn deadline_event() -> Value {
             ("consecutive_misses", uint()),
             ("miss", boolean()),
             ("miss_cause", string()),
+        ],
+    )
+}
+
+/// `vpsom.NodeHealth`.
+pub fn node_health() -> Value {
+    let input = object(
+        "vpsom.InputHealth",
+        &[
+            ("topic", string()),
+            ("received", uint()),
+            ("invalid", uint()),
+            ("overflow", uint()),
+        ],
+    );
+    with_header(
+        "vpsom.NodeHealth",
+        "A node's heartbeat: steps done and per-input received / invalid / overflow counts",
+        &[
+            ("node", string()),
+            ("pid", uint()),
+            ("steps", uint()),
+            ("inputs", array(input)),
         ],
     )
 }

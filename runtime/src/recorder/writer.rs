@@ -315,6 +315,10 @@ impl WriterState {
                 let (t, p) = (e.header.sim_time_ns, e.header.stamp_ns);
                 self.emit(topic::DEADLINE, t, p, |o| convert::deadline(&e, o))?;
             }
+            Msg::Health(h) => {
+                let (t, p) = (h.header.sim_time_ns, h.header.stamp_ns);
+                self.emit(topic::HEALTH, t, p, |o| convert::health(&h, o))?;
+            }
             Msg::Latency(s) => {
                 self.emit(topic::LATENCY, s.time_ns, s.time_ns, |o| {
                     convert::latency(&s, o)

@@ -20,8 +20,8 @@ use runtime::clock::{Clock, MonotonicClock};
 use runtime::executor::{Control, Executor, ExecutorConfig, ExecutorError, apply_sched};
 use runtime::ports::PortContext;
 use runtime::ports::{
-    ContextError, LoanError, PublisherError, ReceiveError, SendError, Stamp, SubscriberError,
-    WaitError,
+    ConnectError, ContextError, LoanError, PublisherError, ReceiveError, SendError, Stamp,
+    SubscriberError, WaitError,
 };
 use shm_types::{DeadlineEvent, NodeHealth};
 use std::error::Error;
@@ -57,6 +57,9 @@ pub enum HostError {
     /// Waiting for data failed.
     #[error(transparent)]
     Wait(#[from] WaitError),
+    /// Connecting to a topic's other ports failed.
+    #[error(transparent)]
+    Connect(#[from] ConnectError),
     /// The executor could not start, or its thread panicked.
     #[error(transparent)]
     Executor(#[from] ExecutorError),

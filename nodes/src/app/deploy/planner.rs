@@ -343,6 +343,9 @@ impl NodeHost for PlannerHost {
         {
             return Err(HostError::LoadRefused);
         }
+        // A late-joining base controller (a restarted sim) gets the current goal from the
+        // topic's history, which iceoryx2 delivers only from the publisher's side.
+        self.nav_pub.update_connections()?;
         let go_on = self.handle(step.unwrap_or(Step::Wait), t)?;
         if let Some(job) = self.pending.take() {
             self.submitted_ns = self.clock.now_ns();

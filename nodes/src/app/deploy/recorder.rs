@@ -13,6 +13,7 @@ use shm_types::{
     DeadlineEvent, DepthFrame, NavGoal, NeckGoal, NodeHealth, ObjectMap, PlannerDecision,
     RobotState,
 };
+
 use std::sync::atomic::AtomicBool;
 use std::time::Duration;
 
@@ -69,6 +70,9 @@ struct RecorderHost {
     nav: Subscriber<NavGoal>,
     neck: Subscriber<NeckGoal>,
     deadline: Subscriber<DeadlineEvent>,
+    health: Subscriber<NodeHealth>,
+    /// Simulated time of the newest robot state (heartbeats carry none).
+    sim_ns: u64,
     ctx: PortContext,
     health_period: Duration,
 }
@@ -101,6 +105,8 @@ impl RecorderHost {
             nav: ctx.subscriber(topics::NAV_GOAL)?,
             neck: ctx.subscriber(topics::NECK_GOAL)?,
             deadline: ctx.subscriber(topics::DEADLINE)?,
+            health: ctx.subscriber(topics::HEALTH)?,
+            sim_ns: 0,
             ctx,
             health_period: Duration::from_secs_f64(1.0 / cfg.run.health_hz),
         })
@@ -116,6 +122,7 @@ impl NodeHost for RecorderHost {
             any = true;
         }
         while let Some(s) = self.state.receive()? {
+            self.sim_ns = s.header.sim_time_ns;
             h.record_state(&s);
             any = true;
         }
@@ -141,6 +148,13 @@ impl NodeHost for RecorderHost {
         }
         while let Some(s) = self.deadline.receive()? {
             h.record_deadline(&s);
+            any = true;
+        }
+        while let Some(s) = self.health.receive()? {
+            // Stamped with the run's simulated time, so it sorts with the other topics.
+            let mut beat = *s;
+            beat.header.sim_time_ns = self.sim_ns;
+            h.record_health(&beat);
             any = true;
         }
         Ok(if any { Flow::Busy } else { Flow::Idle })
