@@ -257,10 +257,11 @@ impl Drop for MapWatch {
     }
 }
 
-/// Waits until the newest map has at least `n` objects.
+/// Waits until the newest map has at least `n` objects and the mapper has published 20 maps
+/// (2 s simulated: mid-run).
 fn wait_objects(run: &Run, maps: &MapWatch, n: usize) {
     let start = Instant::now();
-    while !maps.seen().last().is_some_and(|m| m.1 >= n) {
+    while !maps.seen().last().is_some_and(|m| m.1 >= n && m.0 >= 20) {
         assert!(
             start.elapsed() < GUARD,
             "the map never reached {n} objects ({:?}):\n{}",
@@ -471,6 +472,7 @@ fn a_killed_process_group_leaves_nothing_a_new_run_cannot_clean() {
         .and_then(|n| n.parse().ok())
         .unwrap();
     // The launcher and the four nodes (and any other dead run's on this machine).
+    eprintln!("after the group kill, the new run: {line}");
     assert!(removed >= 5, "{line}");
     assert!(runtime::ports::list_services(&ns).unwrap().is_empty());
     let _ = std::fs::remove_dir_all(&dir);

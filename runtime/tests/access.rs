@@ -24,13 +24,14 @@ fn uid_of(user: &str) -> Option<(u32, u32)> {
     Some((uid, gid))
 }
 
-/// Files under `dir` (recursively) and their modes.
+/// Files (not directories) under `dir`, recursively, and their modes.
 fn modes(dir: &Path, out: &mut Vec<(String, u32)>) {
     for e in std::fs::read_dir(dir).unwrap().flatten() {
         let m = e.metadata().unwrap();
-        out.push((e.path().display().to_string(), m.mode() & 0o777));
         if m.is_dir() {
             modes(&e.path(), out);
+        } else {
+            out.push((e.path().display().to_string(), m.mode() & 0o777));
         }
     }
 }
@@ -133,8 +134,9 @@ fn another_user_cannot_open_a_run_and_runs_its_own_beside_it() {
     let _sub = ctx.subscriber::<RobotState>("robot/state").unwrap();
     publ.loan().unwrap().send(Stamp::default()).unwrap();
 
-    // Everything of it is owner-only: the root directory 0700 and below, and its
-    // shared-memory objects (but iceoryx2's 16-byte global management segment).
+    // Everything of it is owner-only: the root directory 0700 (iceoryx2's directories below it
+    // are 0750, unreachable through it), every file below it, and its shared-memory objects
+    // (but iceoryx2's 16-byte global management segment).
     let root = access::root_path(me);
     let m = std::fs::metadata(&root).unwrap();
     assert_eq!(m.permissions().mode() & 0o777, 0o700, "{}", root.display());
