@@ -157,9 +157,8 @@ mod tests {
     fn a_resumed_mapper_republishes_the_objects_it_was_given() {
         let cfg = Config::default();
         let mut m = Mapper::new(&cfg.mapper, &cfg.camera.camera()).unwrap();
-        let map = published();
+        let mut map = published();
         // The cup's SOPM: one occupied and one free cell observed 3 times each.
-        let mut map = map;
         let cells = (cfg.mapper.sopm.rows * cfg.mapper.sopm.cols) as usize;
         let cup = &mut map.objects[1];
         (cup.sopm_rows, cup.sopm_cols) = (cfg.mapper.sopm.rows as u16, cfg.mapper.sopm.cols as u16);
