@@ -181,6 +181,15 @@ pub struct RunConfig {
     /// CPU of the LBV thread's backup waker (`executor.backup_cpu`; -1 = none): wakes the LBV
     /// there when its own CPU stalls at a release. Needs `lbv_cpu`, a different CPU.
     pub lbv_backup_cpu: i32,
+    /// Rate of every node's heartbeat (`NodeHealth` on the `health` topic), wall Hz.
+    pub health_hz: f64,
+    /// A running node silent for longer than this is hung: killed and restarted, wall s.
+    pub hang_timeout_s: f64,
+    /// Longest wait for a (re)started node's first heartbeat before it counts as hung, wall s.
+    pub start_timeout_s: f64,
+    /// A restarted mapper resumes from the last map it published (the launcher hands its
+    /// newest copy over on `map/resume`); `false` = it starts empty.
+    pub resume_map: bool,
 }
 
 impl Default for RunConfig {
@@ -229,6 +238,15 @@ impl RunConfig {
             "run.lbv_backup_cpu",
             self.lbv_backup_cpu,
             "needs run.lbv_cpu set to another CPU",
+        )?;
+        c.in_range("run.health_hz", self.health_hz, 0.5, 100.0)?;
+        c.in_range("run.hang_timeout_s", self.hang_timeout_s, 0.5, 3600.0)?;
+        c.in_range("run.start_timeout_s", self.start_timeout_s, 1.0, 3600.0)?;
+        c.require(
+            self.hang_timeout_s * self.health_hz >= 2.0,
+            "run.hang_timeout_s",
+            self.hang_timeout_s,
+            "must span at least two heartbeats (run.health_hz)",
         )?;
         c.in_range("run.stop_grace_s", self.stop_grace_s, 0.1, 600.0)
     }

@@ -118,6 +118,9 @@ struct Samples {
     /// Sessions run, and how many ended on their own (the planner finished).
     sessions: u32,
     sessions_finished: u32,
+    /// Soak: the open interval and the closed rows.
+    interval: crate::soak::Interval,
+    rows: Vec<crate::soak::Row>,
 }
 
 /// The command for session `k` (0-based) and its printable form.
@@ -203,6 +206,8 @@ pub fn run(
         measured,
         sessions,
         sessions_finished,
+        interval: _,
+        rows,
     } = acc;
     let lbv_names: Vec<String> = exec.keys().filter(|k| k.contains("lbv")).cloned().collect();
     let lbv_names = if lbv_names.is_empty() {
@@ -289,6 +294,10 @@ pub fn run(
         ],
     )?;
     md += "\n![e2e latency](e2e.png)\n";
+    let growth = crate::soak::growth(&rows, e.rss_warmup_s);
+    if e.report_every_s > 0.0 {
+        md += &crate::soak::markdown(&rows, &growth, e.rss_warmup_s);
+    }
     let mut errors = Vec::new();
     if frame_map.is_empty() || frame_lbv.is_empty() || lbv_exec.is_empty() {
         errors.push(format!(
@@ -298,7 +307,7 @@ pub fn run(
             lbv_exec.len()
         ));
     }
-    let checks = vec![
+    let mut checks = vec![
         BudgetCheck::at_most(
             "e2e_p99_ms (frame → map)",
             p_map.p99 as f64 / 1e6,
@@ -324,6 +333,7 @@ pub fn run(
             "",
         ),
     ];
+    checks.extend(crate::soak::checks(&growth, budgets.soak_rss_growth_pct));
     Ok(Outcome {
         markdown: md,
         json: json!({
@@ -341,6 +351,7 @@ pub fn run(
             })).collect::<Vec<_>>(),
             "probe": probe.as_ref().map(|p| p.json(lbv_budget_ns)),
             "harness_lost": lost,
+            "soak_rows": rows, "soak_rss_growth": growth,
         }),
         checks,
         errors,
@@ -612,6 +623,7 @@ fn session(
         let measured = t0.elapsed().saturating_sub(warm);
         acc.measured = before + measured;
         if acc.measured >= duration {
+            soak_tick(e, acc, pipeline.0.id());
             break;
         }
         if crate::interrupted() {
@@ -662,6 +674,7 @@ fn session(
             }
             if measuring && d.kind == decision_kind::GBV && d.eval_ns > 0 {
                 acc.gbv.push(d.eval_ns);
+                acc.interval.gbv.push(d.eval_ns);
                 log.record(
                     "/e2e/gbv_round",
                     now,
@@ -679,6 +692,15 @@ fn session(
                 if ev.missed != 0 {
                     acc.missed.push(*ev);
                 }
+                if name.contains("lbv") {
+                    acc.interval.cycles += 1;
+                    if ev.missed != 0 {
+                        *acc.interval
+                            .misses
+                            .entry(miss_cause::name(ev.miss_cause).to_string())
+                            .or_default() += 1;
+                    }
+                }
                 log.record(
                     &format!("/e2e/deadline/{name}"),
                     now,
@@ -692,6 +714,7 @@ fn session(
                 )?;
             }
         }
+        soak_tick(e, acc, pipeline.0.id());
         // Checked after draining, so the samples a finished session left behind are counted.
         if let Some(status) = pipeline.0.try_wait()? {
             if !status.success() {
@@ -706,6 +729,32 @@ fn session(
     drop((map, neck, dec, dl, ctx));
     drop(pipeline);
     Ok(ended)
+}
+
+/// Soak: close the interval every `report_every_s` of measured time (RSS of the pipeline whose
+/// launcher is `launcher`).
+fn soak_tick(e: &E2eSettings, acc: &mut Samples, launcher: u32) {
+    if e.report_every_s <= 0.0 {
+        return;
+    }
+    let due = Duration::from_secs_f64(e.report_every_s * (acc.rows.len() + 1) as f64);
+    if acc.measured < due {
+        return;
+    }
+    let rss = crate::soak::pipeline_rss(launcher);
+    let row = acc.interval.close(due.as_secs_f64(), acc.sessions + 1, rss);
+    eprintln!(
+        "soak {:.0} s: session {}, LBV {} cycles, {} misses, GBV {} rounds (p50 {:.0} ms, max {:.0} ms), RSS kB {:?}",
+        row.t_s,
+        row.session,
+        row.cycles,
+        row.misses.values().sum::<u64>(),
+        row.gbv_rounds,
+        row.gbv_p50_ms,
+        row.gbv_max_ms,
+        row.rss_kb
+    );
+    acc.rows.push(row);
 }
 
 /// The hidden `fake-pipeline` subcommand: depth at 30 Hz, a "mapper" publishing the map 8 ms

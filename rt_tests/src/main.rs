@@ -15,6 +15,7 @@ mod link;
 mod payload;
 mod report;
 mod settings;
+mod soak;
 mod stats;
 mod stress;
 mod wakeup;
@@ -89,6 +90,10 @@ enum Cmd {
     Ipc(IpcArgs),
     /// Latencies of a live `vpsom run` pipeline (or `--fake`).
     E2e(E2eArgs),
+    /// Endurance: `e2e` under `--stress` (always) with `vpsom run --gbv-load 1000` sessions back
+    /// to back, a row every `--every` s (LBV misses and causes, GBV rounds, RSS per process) and
+    /// the RSS growth after the warm-up (budget `soak_rss_growth_pct`).
+    Soak(SoakArgs),
     /// Every subcommand for ~1 s with tiny sizes (checks the harness works; no budgets).
     Smoke,
     #[command(hide = true)]
@@ -242,6 +247,31 @@ struct LinkPeerArgs {
 }
 
 #[derive(Debug, Args)]
+struct SoakArgs {
+    /// Measured seconds (default 1800: the 30-minute soak).
+    #[arg(long, default_value_t = 1800.0)]
+    duration: f64,
+    /// Seconds between report rows.
+    #[arg(long, default_value_t = 60.0)]
+    every: f64,
+    /// RSS growth is computed over the rows after this many measured seconds.
+    #[arg(long)]
+    rss_warmup: Option<f64>,
+    /// `vpsom run --time-scale`.
+    #[arg(long)]
+    time_scale: Option<f64>,
+    /// Path of the vpsom binary.
+    #[arg(long)]
+    vpsom: Option<String>,
+    /// Do not run the cyclictest probe beside the pipeline.
+    #[arg(long)]
+    no_probe: bool,
+    /// Arguments for `vpsom run` (after `--`); default `--gbv-load 1000`.
+    #[arg(last = true)]
+    run_args: Vec<String>,
+}
+
+#[derive(Debug, Args)]
 struct IpcPubArgs {
     #[arg(long)]
     ns: String,
@@ -370,6 +400,22 @@ fn real_main() -> Result<std::process::ExitCode> {
                 e.run_args = a.run_args.clone();
             }
             vec![(if a.fake { "e2e-fake" } else { "e2e" }, cli.out.clone())]
+        }
+        Cmd::Soak(a) => {
+            let e = &mut s.e2e;
+            e.duration_s = a.duration;
+            e.report_every_s = a.every;
+            set(&mut e.rss_warmup_s, a.rss_warmup);
+            set(&mut e.vpsom, a.vpsom.clone());
+            set(&mut e.time_scale, a.time_scale);
+            e.probe &= !a.no_probe;
+            e.run_args = if a.run_args.is_empty() {
+                vec!["--gbv-load".into(), "1000".into()]
+            } else {
+                a.run_args.clone()
+            };
+            stress = true;
+            vec![("e2e", cli.out.clone())]
         }
         Cmd::Smoke => {
             smoke_settings(&mut s);

@@ -48,6 +48,8 @@ pub struct Budgets {
     pub lbv_deadline_misses: u64,
     /// Frame → map and frame → LBV latency p99, ms.
     pub e2e_p99_ms: f64,
+    /// Soak: RSS growth of every process after the warm-up, %.
+    pub soak_rss_growth_pct: f64,
 }
 
 impl Default for Budgets {
@@ -206,6 +208,11 @@ pub struct E2eSettings {
     /// Run cyclictest beside the pipeline (one thread per CPU at the LBV's priority) as a
     /// probe of the platform's own wake-ups over the same time.
     pub probe: bool,
+    /// Soak report: a row (LBV misses, GBV rounds, RSS per process) every this many measured
+    /// seconds; 0 = none (`vpsom-rt-tests soak` sets 60).
+    pub report_every_s: f64,
+    /// Soak: RSS growth is computed over the rows after this much measured time, s.
+    pub rss_warmup_s: f64,
 }
 
 impl Default for E2eSettings {
@@ -277,6 +284,7 @@ impl Settings {
         c.in_range("budgets.ipc_flatness", b.ipc_flatness, 0.0, 100.0)?;
         c.positive("budgets.lbv_exec_p99_ms", b.lbv_exec_p99_ms)?;
         c.positive("budgets.e2e_p99_ms", b.e2e_p99_ms)?;
+        c.positive("budgets.soak_rss_growth_pct", b.soak_rss_growth_pct)?;
         let w = &self.wakeup;
         c.count("wakeup.threads", w.threads, 1, 64)?;
         c.require(
@@ -343,6 +351,8 @@ impl Settings {
         c.in_range("e2e.duration_s", e.duration_s, 0.1, 86_400.0)?;
         c.in_range("e2e.warmup_s", e.warmup_s, 0.0, 600.0)?;
         c.in_range("e2e.time_scale", e.time_scale, 0.01, 100.0)?;
+        c.in_range("e2e.report_every_s", e.report_every_s, 0.0, 86_400.0)?;
+        c.in_range("e2e.rss_warmup_s", e.rss_warmup_s, 0.0, 86_400.0)?;
         c.count("stress.cpu_workers", self.stress.cpu_workers, 0, 1024)?;
         c.count("stress.memory_mb", self.stress.memory_mb, 0, 1 << 20)
     }

@@ -11,7 +11,7 @@
 
 use runtime::executor::{Control, Cycle, Executor, ExecutorConfig};
 use runtime::ports::{PortContext, PortsConfig, Stamp};
-use shm_types::DepthFrame;
+use shm_types::{DepthFrame, Intrinsics};
 use std::time::{Duration, Instant};
 
 mod common;
@@ -45,6 +45,15 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
         let mut f = publ.loan()?; // includes zero-filling 600 KB in place
         f.width = 640;
         f.height = 480;
+        // The subscriber validates on receipt: a frame without intrinsics is dropped.
+        f.intrinsics = Intrinsics {
+            fx: 525.0,
+            fy: 525.0,
+            cx: 320.0,
+            cy: 240.0,
+            min_range: 0.5,
+            max_range: 4.5,
+        };
         f.send(Stamp {
             source_ns: k,
             sim_ns: k,

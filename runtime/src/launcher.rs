@@ -1,6 +1,13 @@
-//! Process launcher with health watching: spawns node processes, watches their exit status and
-//! iceoryx2's dead-node list, removes a dead node's stale shared-memory resources, restarts it up
-//! to a limit, and stops everything cleanly (SIGINT, then SIGKILL after a grace period).
+//! Process launcher with health watching: spawns node processes, watches their exit status,
+//! their heartbeats ([`Liveness`]: a child that stops beating without dying is hung, and is
+//! killed) and iceoryx2's dead-node list, removes a dead node's stale shared-memory resources,
+//! restarts it up to a limit, and stops everything cleanly (SIGINT, then SIGKILL after a grace
+//! period).
+//!
+//! The launcher does not know where heartbeats come from: its owner receives them (for `vpsom
+//! run`, `NodeHealth` samples on the `health` topic) and calls [`Launcher::heartbeat`] with the
+//! sender's name and pid, so a heartbeat still buffered from a killed incarnation never counts
+//! for its successor.
 
 use iceoryx2::node::NodeView;
 use iceoryx2::prelude::*;
@@ -10,6 +17,11 @@ use std::os::unix::process::ExitStatusExt;
 use std::path::PathBuf;
 use std::process::{Child, Command, ExitStatus, Stdio};
 use std::time::{Duration, Instant};
+
+/// Environment variable every child is started with: how many times it has been restarted
+/// (`0` at the first start). A child that can continue an earlier incarnation's work (the
+/// mapper, from its last map) reads it.
+pub const RESTART_ENV: &str = "VPSOM_RESTART";
 
 /// How to start one supervised process.
 #[derive(Debug, Clone)]
@@ -24,6 +36,17 @@ pub struct ChildSpec {
     pub max_restarts: u32,
     /// Whether the child's stdout is passed through (else discarded); stderr always is.
     pub inherit_stdout: bool,
+    /// Hang detection: `None` = the child is only watched for its exit.
+    pub liveness: Option<Liveness>,
+}
+
+/// When a child that still runs counts as hung.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct Liveness {
+    /// Longest silence between two heartbeats.
+    pub timeout: Duration,
+    /// Longest wait for the first heartbeat after a (re)start.
+    pub startup: Duration,
 }
 
 /// Why a child stopped.
@@ -69,6 +92,17 @@ fn signal_name(sig: i32) -> &'static str {
 /// Something the launcher noticed.
 #[derive(Debug, Clone, PartialEq)]
 pub enum ChildEvent {
+    /// A running child sent no heartbeat for longer than its [`Liveness`] allows; it was
+    /// killed (SIGKILL), and its death follows as [`ChildEvent::Restarted`] or
+    /// [`ChildEvent::Failed`].
+    Hung {
+        /// Child name.
+        name: String,
+        /// Time since its last heartbeat (or since its start, if it never sent one).
+        silent_for: Duration,
+        /// Whether it had sent any heartbeat.
+        ever_beat: bool,
+    },
     /// A child exited with code 0 on its own.
     Finished {
         /// Child name.
@@ -97,6 +131,16 @@ pub enum ChildEvent {
 impl fmt::Display for ChildEvent {
     fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
         match self {
+            ChildEvent::Hung {
+                name,
+                silent_for,
+                ever_beat,
+            } => write!(
+                f,
+                "{name}: hung: no heartbeat for {:.1} s{}; killed",
+                silent_for.as_secs_f64(),
+                if *ever_beat { "" } else { " since its start" }
+            ),
             ChildEvent::Finished { name } => write!(f, "{name}: finished"),
             ChildEvent::Restarted {
                 name,
@@ -135,6 +179,25 @@ struct Supervised {
     child: Option<Child>,
     restarts: u32,
     last_exit: Option<ExitReason>,
+    /// When the running incarnation started.
+    started: Instant,
+    /// Its newest heartbeat.
+    last_beat: Option<Instant>,
+}
+
+impl Supervised {
+    /// If the running child is hung (per its liveness): how long it has been silent, and
+    /// whether it ever sent a heartbeat.
+    fn hung(&self, now: Instant) -> Option<(Duration, bool)> {
+        let l = self.spec.liveness?;
+        self.child.as_ref()?;
+        let (since, limit) = match self.last_beat {
+            Some(t) => (t, l.timeout),
+            None => (self.started, l.startup),
+        };
+        let silent = now.saturating_duration_since(since);
+        (silent > limit).then_some((silent, self.last_beat.is_some()))
+    }
 }
 
 /// Supervises a set of child processes.
@@ -164,9 +227,13 @@ impl Launcher {
     /// crashed processes of earlier runs.
     pub fn new(name: &str, config: &iceoryx2::config::Config) -> Result<Self, LaunchError> {
         let node_name = NodeName::new(name).map_err(|e| LaunchError::Node(format!("{e:?}")))?;
+        // The dead nodes are removed below, where they are counted, not silently by the
+        // node's creation.
+        let mut config = config.clone();
+        config.global.node.cleanup_dead_nodes_on_creation = false;
         let node = NodeBuilder::new()
             .name(&node_name)
-            .config(config)
+            .config(&config)
             .signal_handling_mode(SignalHandlingMode::Disabled)
             .create::<ipc::Service>()
             .map_err(|e| LaunchError::Node(format!("{e:?}")))?;
@@ -185,15 +252,31 @@ impl Launcher {
 
     /// Start a supervised child.
     pub fn spawn(&mut self, spec: ChildSpec) -> Result<u32, LaunchError> {
-        let child = start(&spec)?;
+        let child = start(&spec, 0)?;
         let pid = child.id();
         self.children.push(Supervised {
             spec,
             child: Some(child),
             restarts: 0,
             last_exit: None,
+            started: Instant::now(),
+            last_beat: None,
         });
         Ok(pid)
+    }
+
+    /// A heartbeat from child `name` with process id `pid`; one from another pid (a killed
+    /// incarnation's, still buffered) or an unknown name is ignored. Returns whether it counted.
+    pub fn heartbeat(&mut self, name: &str, pid: u32) -> bool {
+        let Some(sup) = self
+            .children
+            .iter_mut()
+            .find(|c| c.spec.name == name && c.child.as_ref().is_some_and(|ch| ch.id() == pid))
+        else {
+            return false;
+        };
+        sup.last_beat = Some(Instant::now());
+        true
     }
 
     /// Pids of the running children by name.
@@ -225,10 +308,23 @@ impl Launcher {
         dead
     }
 
-    /// Check every child once: report exits, clean stale resources, restart within limits.
+    /// Check every child once: kill hung ones, report exits, clean stale resources, restart
+    /// within limits.
     pub fn poll(&mut self) -> Vec<ChildEvent> {
         let mut events = Vec::new();
         for i in 0..self.children.len() {
+            if let Some((silent_for, ever_beat)) = self.children[i].hung(Instant::now())
+                && let Some(child) = self.children[i].child.as_mut()
+            {
+                // SIGKILL also ends a stopped process; the exit is collected below.
+                let _ = child.kill();
+                let _ = child.wait();
+                events.push(ChildEvent::Hung {
+                    name: self.children[i].spec.name.clone(),
+                    silent_for,
+                    ever_beat,
+                });
+            }
             let status = match self.children[i].child.as_mut().map(Child::try_wait) {
                 Some(Ok(Some(status))) => status,
                 Some(Ok(None)) | None => continue,
@@ -264,9 +360,11 @@ impl Launcher {
                 continue;
             }
             sup.restarts += 1;
-            match start(&sup.spec) {
+            match start(&sup.spec, sup.restarts) {
                 Ok(child) => {
                     sup.child = Some(child);
+                    sup.started = Instant::now();
+                    sup.last_beat = None;
                     events.push(ChildEvent::Restarted {
                         name: sup.spec.name.clone(),
                         reason,
@@ -330,9 +428,10 @@ impl Drop for Launcher {
     }
 }
 
-fn start(spec: &ChildSpec) -> Result<Child, LaunchError> {
+fn start(spec: &ChildSpec, restarts: u32) -> Result<Child, LaunchError> {
     Command::new(&spec.program)
         .args(&spec.args)
+        .env(RESTART_ENV, restarts.to_string())
         .stdin(Stdio::null())
         .stdout(if spec.inherit_stdout {
             Stdio::inherit()
@@ -359,6 +458,7 @@ mod tests {
             args: vec!["-c".into(), script.into()],
             max_restarts,
             inherit_stdout: false,
+            liveness: None,
         }
     }
 
@@ -476,5 +576,75 @@ mod tests {
             "killed by signal 9 (SIGKILL)"
         );
         let _ = std::fs::remove_dir_all(&dir);
+    }
+
+    #[test]
+    fn a_silent_child_is_killed_as_hung_and_restarted_a_beating_one_is_not() {
+        let mut l =
+            Launcher::new("launcher-test-d", iceoryx2::config::Config::global_config()).unwrap();
+        let liveness = Some(Liveness {
+            timeout: Duration::from_millis(300),
+            startup: Duration::from_millis(300),
+        });
+        // Both run forever; only the "beating" one is given heartbeats.
+        l.spawn(ChildSpec {
+            liveness,
+            ..sh("silent", "exec sleep 600", 1)
+        })
+        .unwrap();
+        let beating_pid = l
+            .spawn(ChildSpec {
+                liveness,
+                ..sh("beating", "exec sleep 600", 0)
+            })
+            .unwrap();
+        // A heartbeat from a pid that is not the child's does not count.
+        assert!(!l.heartbeat("beating", beating_pid + 1));
+        let mut events = Vec::new();
+        let start = Instant::now();
+        // Hang guard only: the 60 s limit ends a test whose launcher never reacts.
+        while events.len() < 4 && start.elapsed() < Duration::from_secs(60) {
+            assert!(l.heartbeat("beating", beating_pid));
+            events.extend(l.poll());
+            std::thread::sleep(Duration::from_millis(10));
+        }
+        let names: Vec<(&str, &str)> = events
+            .iter()
+            .map(|e| match e {
+                ChildEvent::Hung { name, .. } => (name.as_str(), "hung"),
+                ChildEvent::Restarted { name, .. } => (name.as_str(), "restarted"),
+                ChildEvent::Failed { name, .. } => (name.as_str(), "failed"),
+                ChildEvent::Finished { name } => (name.as_str(), "finished"),
+            })
+            .collect();
+        // The silent child: hung at start, restarted, hung again, out of restarts.
+        assert_eq!(
+            names,
+            vec![
+                ("silent", "hung"),
+                ("silent", "restarted"),
+                ("silent", "hung"),
+                ("silent", "failed")
+            ],
+            "{events:?}"
+        );
+        match &events[0] {
+            ChildEvent::Hung {
+                silent_for,
+                ever_beat,
+                ..
+            } => assert!(*silent_for > Duration::from_millis(300) && !ever_beat),
+            e => panic!("{e:?}"),
+        }
+        assert!(
+            matches!(&events[1], ChildEvent::Restarted { reason, .. } if *reason == ExitReason::Signal(libc::SIGKILL)),
+            "{events:?}"
+        );
+        assert!(
+            l.pids().contains_key("beating"),
+            "the beating child was killed"
+        );
+        let out = l.stop_all(Duration::from_secs(10));
+        assert_eq!(out.len(), 2);
     }
 }

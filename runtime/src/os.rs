@@ -21,6 +21,12 @@ pub fn gettid() -> libc::pid_t {
     unsafe { libc::gettid() }
 }
 
+/// The calling process's effective user id.
+pub fn euid() -> u32 {
+    // SAFETY: geteuid has no preconditions and cannot fail.
+    unsafe { libc::geteuid() }
+}
+
 /// Set the calling thread to `SCHED_FIFO` at `priority` (1..=99). EPERM without CAP_SYS_NICE or
 /// an RLIMIT_RTPRIO allowance.
 pub fn set_fifo(priority: i32) -> io::Result<()> {
@@ -35,6 +41,46 @@ pub fn set_other() -> io::Result<()> {
 /// Set the calling thread to `SCHED_IDLE` (runs only when nothing else wants the CPU).
 pub fn set_idle() -> io::Result<()> {
     set_policy(libc::SCHED_IDLE, 0)
+}
+
+/// `struct sched_attr` of `sched_setattr(2)` (not in `libc`).
+#[repr(C)]
+struct SchedAttr {
+    size: u32,
+    sched_policy: u32,
+    sched_flags: u64,
+    sched_nice: i32,
+    sched_priority: u32,
+    sched_runtime: u64,
+    sched_deadline: u64,
+    sched_period: u64,
+}
+
+/// `SCHED_DEADLINE` (not in `libc`).
+const SCHED_DEADLINE: u32 = 6;
+
+/// Set the calling thread to `SCHED_DEADLINE`: `runtime_ns` of CPU in every `period_ns`, due by
+/// the end of the period. Needs CAP_SYS_NICE, a thread allowed on every CPU of its root domain,
+/// and free deadline bandwidth (admission control: EBUSY).
+pub fn set_deadline(runtime_ns: u64, period_ns: u64) -> io::Result<()> {
+    let attr = SchedAttr {
+        size: std::mem::size_of::<SchedAttr>() as u32,
+        sched_policy: SCHED_DEADLINE,
+        sched_flags: 0,
+        sched_nice: 0,
+        sched_priority: 0,
+        sched_runtime: runtime_ns,
+        sched_deadline: period_ns,
+        sched_period: period_ns,
+    };
+    // SAFETY: `attr` is a valid, initialised `sched_attr` whose `size` field says how large it
+    // is; pid 0 means the calling thread; flags 0; the kernel only reads the struct.
+    let r = unsafe { libc::syscall(libc::SYS_sched_setattr, 0, &attr as *const SchedAttr, 0) };
+    if r == 0 {
+        Ok(())
+    } else {
+        Err(io::Error::last_os_error())
+    }
 }
 
 fn set_policy(policy: libc::c_int, priority: i32) -> io::Result<()> {

@@ -25,6 +25,7 @@ fn a_fixed_rate_caller_is_never_blocked_by_a_saturated_pool() {
         queue: 4,
         priority: PoolPriority::Idle,
         nice: 19,
+        ..PoolConfig::default()
     };
     let pool = Arc::new(WorkerPool::<u64>::new("gbv-test", &cfg).unwrap());
     for p in pool.priorities() {
@@ -171,4 +172,60 @@ fn workers_of_a_pool_built_on_a_pinned_thread_run_on_the_process_cpus() {
     .unwrap();
     assert_eq!(creator, "0");
     assert_eq!(worker, process);
+}
+
+/// The scheduling policy of the calling thread (field 41 of `/proc/thread-self/stat`).
+fn policy() -> u32 {
+    let stat = std::fs::read_to_string("/proc/thread-self/stat").unwrap();
+    let (_, rest) = stat.rsplit_once(')').unwrap();
+    // Fields from the 3rd on; policy is the 41st.
+    rest.split_whitespace()
+        .nth(41 - 3)
+        .unwrap()
+        .parse()
+        .unwrap()
+}
+
+#[test]
+fn by_default_workers_run_at_nice_10_under_sched_other() {
+    let pool = WorkerPool::<u32>::new(
+        "nice-test",
+        &PoolConfig {
+            threads: 1,
+            ..PoolConfig::default()
+        },
+    )
+    .unwrap();
+    assert_eq!(pool.priorities(), &[WorkerPriority::Nice(10)]);
+    pool.try_submit(policy).unwrap();
+    let done = pool.recv_timeout(Duration::from_secs(60)).expect("job ran");
+    assert_eq!(done.result.unwrap(), libc::SCHED_OTHER as u32);
+}
+
+#[test]
+#[ignore = "needs CAP_SYS_NICE (root) for SCHED_DEADLINE"]
+fn a_deadline_pool_runs_its_workers_under_their_reservation() {
+    let pool = WorkerPool::<u32>::new(
+        "dl-test",
+        &PoolConfig {
+            threads: 1,
+            priority: PoolPriority::Deadline,
+            deadline_runtime_us: 2_000,
+            deadline_period_us: 10_000,
+            ..PoolConfig::default()
+        },
+    )
+    .unwrap();
+    assert_eq!(
+        pool.priorities(),
+        &[WorkerPriority::Deadline {
+            runtime_us: 2_000,
+            period_us: 10_000
+        }],
+        "SCHED_DEADLINE was refused"
+    );
+    pool.try_submit(policy).unwrap();
+    let done = pool.recv_timeout(Duration::from_secs(60)).expect("job ran");
+    // SCHED_DEADLINE = 6.
+    assert_eq!(done.result.unwrap(), 6);
 }

@@ -149,6 +149,7 @@ fn a_restarted_recorder_continues_in_a_new_segment() {
         ],
         max_restarts: 1,
         inherit_stdout: false,
+        liveness: None,
     })
     .unwrap();
 

@@ -91,6 +91,12 @@ fn write_session(path: &Path) -> RecorderSummary {
             reserved: 0,
         });
         h.record_deadline(&deadline(i));
+        let mut beat = shm_types::NodeHealth::default();
+        beat.header.seq = i;
+        beat.header.sim_time_ns = i * 1_000_000_000;
+        beat.set_node_name("mapper");
+        beat.push_input("depth", 10 * i, 1, 2);
+        h.record_health(&beat);
         hist.record(1_000 * i).unwrap();
         h.record_latency(LatencySummary {
             time_ns: i * 1_000_000_000,
@@ -160,6 +166,7 @@ fn every_message_is_written_once_and_decodes_with_its_schema() {
         (topic::NAV_GOAL, N),
         (topic::NECK_GOAL, N),
         (topic::DEADLINE, N),
+        (topic::HEALTH, N),
         (topic::LATENCY, N),
         (topic::LOG, N),
         (topic::METRICS, 1),

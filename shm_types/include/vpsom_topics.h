@@ -30,6 +30,9 @@
 /* Full service name; namespace and topic are string literals. */
 #define VPSOM_SERVICE(namespace, topic) VPSOM_SERVICE_ROOT "/" namespace "/" topic
 #define VPSOM_USER_HEADER_TYPE_NAME "()"
+/* iceoryx2 global.root-path and global.prefix of a run: printf formats of the uid. */
+#define VPSOM_IOX2_ROOT_FMT "/tmp/vpsom-iox2-u%u/"
+#define VPSOM_IOX2_PREFIX_FMT "vpsom_u%u_"
 #define VPSOM_TOPIC_DEPTH             "depth" /* vpsom_DepthFrame (vpsom::DepthFrame); from sim (robot: depth camera driver): depth image, u16 mm, with intrinsics and the estimated world_from_camera pose */
 #define VPSOM_TOPIC_DETECTIONS        "detections" /* vpsom_Detections (vpsom::Detections); from sim (robot: object detector): detections of one depth frame (frame_seq = that frame's header.seq) */
 #define VPSOM_TOPIC_ROBOT_STATE       "robot/state" /* vpsom_RobotState (vpsom::RobotState); from sim (robot: base controller + localization): estimated base pose, neck angles, odometry covariance, navigation status */
@@ -37,11 +40,13 @@
 #define VPSOM_TOPIC_SIM_VISIBILITY    "sim/visibility" /* vpsom_FrameVisibility (vpsom::FrameVisibility); from sim only: ground-truth visibility per rendered frame (evaluation; absent on a robot) */
 #define VPSOM_TOPIC_NAV_GRID          "nav/grid" /* vpsom_OccupancyGrid (vpsom::OccupancyGrid); from sim (robot: navigation stack): navigation occupancy grid (obstacles only) */
 #define VPSOM_TOPIC_MAP               "map" /* vpsom_ObjectMap (vpsom::ObjectMap); from mapper: sparse object map */
+#define VPSOM_TOPIC_MAP_RESUME        "map/resume" /* vpsom_ObjectMap (vpsom::ObjectMap); from launcher: the newest map, handed to a restarted mapper (history 1) */
 #define VPSOM_TOPIC_MAP_GRID          "map/grid" /* vpsom_OccupancyGrid (vpsom::OccupancyGrid); from mapper: exploration grid built from depth (with unknown cells) */
 #define VPSOM_TOPIC_NAV_GOAL          "nav/goal" /* vpsom_NavGoal (vpsom::NavGoal); from planner: chassis goal (consumed by the base controller) */
 #define VPSOM_TOPIC_NECK_GOAL         "neck/goal" /* vpsom_NeckGoal (vpsom::NeckGoal); from planner: neck goal relative to the base (consumed by the neck controller) */
 #define VPSOM_TOPIC_PLANNER_DECISION  "planner/decision" /* vpsom_PlannerDecision (vpsom::PlannerDecision); from planner: evaluated candidates of each GBV round and LBV cycle */
 #define VPSOM_TOPIC_DEADLINE          "deadline" /* vpsom_DeadlineEvent (vpsom::DeadlineEvent); from planner (real-time threads): one record per periodic executor cycle */
+#define VPSOM_TOPIC_HEALTH            "health" /* vpsom_NodeHealth (vpsom::NodeHealth); from every node host (a few Hz): heartbeat and per-input received / invalid / overflow counts (the launcher's liveness check) */
 
 /* ---- iceoryx2 payload type names ---- */
 #define VPSOM_TYPE_NAME_HEADER             "vpsom::Header"
@@ -61,6 +66,8 @@
 #define VPSOM_TYPE_NAME_PLANNER_DECISION   "vpsom::PlannerDecision"
 #define VPSOM_TYPE_NAME_OBJECT_VISIBILITY  "vpsom::ObjectVisibility"
 #define VPSOM_TYPE_NAME_FRAME_VISIBILITY   "vpsom::FrameVisibility"
+#define VPSOM_TYPE_NAME_INPUT_HEALTH       "vpsom::InputHealth"
+#define VPSOM_TYPE_NAME_NODE_HEALTH        "vpsom::NodeHealth"
 
 /* ---- capacities and enum values ---- */
 #define VPSOM_MAX_WIDTH                    640
@@ -73,6 +80,9 @@
 #define VPSOM_MAX_GRID_CELLS               65536
 #define VPSOM_MAX_CANDIDATES               64
 #define VPSOM_THREAD_NAME_LEN              32
+#define VPSOM_MAX_HEALTH_INPUTS            16
+#define VPSOM_HEALTH_TOPIC_LEN             32
+#define VPSOM_HEALTH_NODE_LEN              16
 #define VPSOM_COCO_CLASS_COUNT             80
 #define VPSOM_MASK_MODE_BOXES              0
 #define VPSOM_MASK_MODE_MASKS              1
@@ -567,4 +577,42 @@ VPSOM_STATIC_ASSERT(offsetof(vpsom_FrameVisibility, frame_seq) == 24, "vpsom_Fra
 VPSOM_STATIC_ASSERT(offsetof(vpsom_FrameVisibility, count) == 32, "vpsom_FrameVisibility.count: offset");
 VPSOM_STATIC_ASSERT(offsetof(vpsom_FrameVisibility, reserved) == 36, "vpsom_FrameVisibility.reserved: offset");
 VPSOM_STATIC_ASSERT(offsetof(vpsom_FrameVisibility, items) == 40, "vpsom_FrameVisibility.items: offset");
+
+/* vpsom::InputHealth: 56 bytes, alignment 8 */
+typedef struct vpsom_InputHealth {
+#ifdef __cplusplus
+    static constexpr const char *IOX2_TYPE_NAME = "vpsom::InputHealth";
+#endif
+    uint64_t received;                       /* offset 0, count */
+    uint64_t invalid;                        /* offset 8, count */
+    uint64_t overflow;                       /* offset 16, count */
+    uint8_t topic[32];                       /* offset 24, utf8 */
+} vpsom_InputHealth;
+VPSOM_STATIC_ASSERT(sizeof(vpsom_InputHealth) == 56, "vpsom_InputHealth: size");
+VPSOM_STATIC_ASSERT(VPSOM_ALIGNOF(vpsom_InputHealth) == 8, "vpsom_InputHealth: alignment");
+VPSOM_STATIC_ASSERT(offsetof(vpsom_InputHealth, received) == 0, "vpsom_InputHealth.received: offset");
+VPSOM_STATIC_ASSERT(offsetof(vpsom_InputHealth, invalid) == 8, "vpsom_InputHealth.invalid: offset");
+VPSOM_STATIC_ASSERT(offsetof(vpsom_InputHealth, overflow) == 16, "vpsom_InputHealth.overflow: offset");
+VPSOM_STATIC_ASSERT(offsetof(vpsom_InputHealth, topic) == 24, "vpsom_InputHealth.topic: offset");
+
+/* vpsom::NodeHealth: 952 bytes, alignment 8 */
+typedef struct vpsom_NodeHealth {
+#ifdef __cplusplus
+    static constexpr const char *IOX2_TYPE_NAME = "vpsom::NodeHealth";
+#endif
+    vpsom_Header header;                     /* offset 0, struct */
+    uint64_t steps;                          /* offset 24, count */
+    uint32_t pid;                            /* offset 32, id */
+    uint32_t count;                          /* offset 36, count */
+    uint8_t node[16];                        /* offset 40, utf8 */
+    vpsom_InputHealth inputs[16];            /* offset 56, struct */
+} vpsom_NodeHealth;
+VPSOM_STATIC_ASSERT(sizeof(vpsom_NodeHealth) == 952, "vpsom_NodeHealth: size");
+VPSOM_STATIC_ASSERT(VPSOM_ALIGNOF(vpsom_NodeHealth) == 8, "vpsom_NodeHealth: alignment");
+VPSOM_STATIC_ASSERT(offsetof(vpsom_NodeHealth, header) == 0, "vpsom_NodeHealth.header: offset");
+VPSOM_STATIC_ASSERT(offsetof(vpsom_NodeHealth, steps) == 24, "vpsom_NodeHealth.steps: offset");
+VPSOM_STATIC_ASSERT(offsetof(vpsom_NodeHealth, pid) == 32, "vpsom_NodeHealth.pid: offset");
+VPSOM_STATIC_ASSERT(offsetof(vpsom_NodeHealth, count) == 36, "vpsom_NodeHealth.count: offset");
+VPSOM_STATIC_ASSERT(offsetof(vpsom_NodeHealth, node) == 40, "vpsom_NodeHealth.node: offset");
+VPSOM_STATIC_ASSERT(offsetof(vpsom_NodeHealth, inputs) == 56, "vpsom_NodeHealth.inputs: offset");
 

@@ -94,7 +94,8 @@ def main():
     ap.add_argument("--class", dest="cls", default="chair", help="COCO class of the object")
     args = ap.parse_args()
 
-    node = iox2.NodeBuilder.new().create(iox2.ServiceType.Ipc)
+    # The run's own iceoryx2 instance (per-user root directory and prefix).
+    node = iox2.NodeBuilder.new().config(vt.iceoryx2_config(iox2)).create(iox2.ServiceType.Ipc)
     topics = ("robot/state", "depth", "detections", "nav/grid")
     ports = {t: Port(node, args.namespace, t) for t in topics}
     background, object_row = depth_rows()

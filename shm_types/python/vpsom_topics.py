@@ -24,6 +24,17 @@ def service_name(namespace: str, topic: str) -> str:
     return f"{SERVICE_ROOT}/{namespace}/{topic}"
 
 
+def iceoryx2_config(iox2, uid=None):
+    """The iceoryx2 config a run of user `uid` (default: this process's) uses: its own
+    root directory and prefix (services are owner-only). Pass it to NodeBuilder.config()."""
+    import os
+    uid = os.geteuid() if uid is None else uid
+    c = iox2.config.default()
+    c.global_cfg.root_path = iox2.Path.new(f"/tmp/vpsom-iox2-u{uid}/")
+    c.global_cfg.prefix = iox2.FileName.new(f"vpsom_u{uid}_")
+    return c
+
+
 # ---- capacities and enum values ----
 MAX_WIDTH = 640
 MAX_HEIGHT = 480
@@ -35,6 +46,9 @@ MAX_OBJECT_POINTS = 64
 MAX_GRID_CELLS = 65536
 MAX_CANDIDATES = 64
 THREAD_NAME_LEN = 32
+MAX_HEALTH_INPUTS = 16
+HEALTH_TOPIC_LEN = 32
+HEALTH_NODE_LEN = 16
 COCO_CLASS_COUNT = 80
 MASK_MODE_BOXES = 0
 MASK_MODE_MASKS = 1
@@ -434,6 +448,40 @@ class FrameVisibility(ctypes.Structure):
         return "vpsom::FrameVisibility"
 
 
+class InputHealth(ctypes.Structure):
+    """vpsom::InputHealth: 56 bytes, alignment 8."""
+
+    _fields_ = [
+        ("received", ctypes.c_uint64),  # offset 0, count
+        ("invalid", ctypes.c_uint64),  # offset 8, count
+        ("overflow", ctypes.c_uint64),  # offset 16, count
+        ("topic", ctypes.c_uint8 * 32),  # offset 24, utf8
+    ]
+
+    @staticmethod
+    def type_name() -> str:
+        """The iceoryx2 payload type name (used by `publish_subscribe`)."""
+        return "vpsom::InputHealth"
+
+
+class NodeHealth(ctypes.Structure):
+    """vpsom::NodeHealth: 952 bytes, alignment 8."""
+
+    _fields_ = [
+        ("header", Header),  # offset 0, struct
+        ("steps", ctypes.c_uint64),  # offset 24, count
+        ("pid", ctypes.c_uint32),  # offset 32, id
+        ("count", ctypes.c_uint32),  # offset 36, count
+        ("node", ctypes.c_uint8 * 16),  # offset 40, utf8
+        ("inputs", InputHealth * 16),  # offset 56, struct
+    ]
+
+    @staticmethod
+    def type_name() -> str:
+        """The iceoryx2 payload type name (used by `publish_subscribe`)."""
+        return "vpsom::NodeHealth"
+
+
 # Topic -> payload class.
 TOPICS = {
     "depth": DepthFrame,
@@ -443,11 +491,13 @@ TOPICS = {
     "sim/visibility": FrameVisibility,
     "nav/grid": OccupancyGrid,
     "map": ObjectMap,
+    "map/resume": ObjectMap,
     "map/grid": OccupancyGrid,
     "nav/goal": NavGoal,
     "neck/goal": NeckGoal,
     "planner/decision": PlannerDecision,
     "deadline": DeadlineEvent,
+    "health": NodeHealth,
 }
 
 # The Rust layout: per type, iceoryx2 type name, size, alignment and per field (offset,
@@ -634,5 +684,19 @@ LAYOUT = {
         "count": {"offset": 32, "size": 4, "type": "u32", "dims": [], "unit": "count"},
         "reserved": {"offset": 36, "size": 4, "type": "u32", "dims": [], "unit": "pad"},
         "items": {"offset": 40, "size": 4096, "type": "ObjectVisibility", "dims": [128], "unit": "struct"},
+    }},
+    "InputHealth": {"type_name": "vpsom::InputHealth", "size": 56, "align": 8, "fields": {
+        "received": {"offset": 0, "size": 8, "type": "u64", "dims": [], "unit": "count"},
+        "invalid": {"offset": 8, "size": 8, "type": "u64", "dims": [], "unit": "count"},
+        "overflow": {"offset": 16, "size": 8, "type": "u64", "dims": [], "unit": "count"},
+        "topic": {"offset": 24, "size": 32, "type": "u8", "dims": [32], "unit": "utf8"},
+    }},
+    "NodeHealth": {"type_name": "vpsom::NodeHealth", "size": 952, "align": 8, "fields": {
+        "header": {"offset": 0, "size": 24, "type": "Header", "dims": [], "unit": "struct"},
+        "steps": {"offset": 24, "size": 8, "type": "u64", "dims": [], "unit": "count"},
+        "pid": {"offset": 32, "size": 4, "type": "u32", "dims": [], "unit": "id"},
+        "count": {"offset": 36, "size": 4, "type": "u32", "dims": [], "unit": "count"},
+        "node": {"offset": 40, "size": 16, "type": "u8", "dims": [16], "unit": "utf8"},
+        "inputs": {"offset": 56, "size": 896, "type": "InputHealth", "dims": [16], "unit": "struct"},
     }},
 }

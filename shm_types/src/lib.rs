@@ -27,6 +27,7 @@
 //! | `message.rs` | [`Message`], [`init_zeroed`], [`init_reused`] |
 //! | `validate.rs` | [`Validate`], [`ValidationError`] |
 //! | `bounds.rs` | [`bounds`]: the plausibility bounds validation applies (world extent, yaw, pitch) |
+//! | `health.rs` | [`NodeHealth`]: every node's heartbeat and input counts (the `health` topic) |
 //! | `classes.rs` | the COCO class table |
 //! | `contract/` | [`contract`]: every topic's service name, type name, size, alignment, field offsets and units, and the generated C header and Python module |
 //! | `include/vpsom_topics.h`, `python/vpsom_topics.py` | generated from [`contract`], committed |
@@ -46,6 +47,12 @@
 //!   .publish_subscribe(vpsom_topics.DepthFrame)`: the class's `type_name()` gives iceoryx2 the
 //!   type name, ctypes the size and alignment.
 //!
+//! The node must use the run's iceoryx2 instance: every user has its own
+//! ([`contract::iceoryx2_root_path`], [`contract::iceoryx2_prefix`]; Python:
+//! `NodeBuilder.new().config(vpsom_topics.iceoryx2_config(iox2))`, C/C++: `global.root-path`
+//! and `global.prefix` from `VPSOM_IOX2_ROOT_FMT` / `VPSOM_IOX2_PREFIX_FMT` with the uid), and
+//! only that user's processes can open it.
+//!
 //! What the service must match: payload type name `vpsom::<Name>`, `size_of`, `align_of`, no
 //! user header. Start `vpsom run` first and *open* the services (our nodes create them with the
 //! `[ports]` settings of `config/default.toml`; a service created first by a driver with
@@ -64,11 +71,13 @@
 pub mod bounds;
 mod classes;
 pub mod contract;
+mod health;
 mod message;
 mod messages;
 mod validate;
 
 pub use classes::{COCO_CLASSES, ClassId, class_id, class_name, is_background_class};
+pub use health::{HEALTH_NODE_LEN, HEALTH_TOPIC_LEN, InputHealth, MAX_HEALTH_INPUTS, NodeHealth};
 pub use message::{Message, init_reused, init_zeroed};
 pub use messages::*;
 pub use validate::{Validate, ValidationError};

@@ -5,8 +5,8 @@
 
 use crate::{
     AnyBitPattern, DeadlineEvent, DepthFrame, Detections, FrameVisibility, Header, NavGoal,
-    NeckGoal, ObjectMap, OccupancyGrid, PlannerDecision, RobotState, Validate, ZeroValid,
-    zero_in_place,
+    NeckGoal, NodeHealth, ObjectMap, OccupancyGrid, PlannerDecision, RobotState, Validate,
+    ZeroValid, zero_in_place,
 };
 use iceoryx2::prelude::{ZeroCopySend, ipc};
 use iceoryx2::sample_mut::SampleMut;
@@ -45,7 +45,8 @@ message!(
     NeckGoal,
     DeadlineEvent,
     PlannerDecision,
-    FrameVisibility
+    FrameVisibility,
+    NodeHealth
 );
 
 /// Zero-fill a loaned, uninitialised iceoryx2 sample in place (in shared memory, no stack

@@ -22,8 +22,9 @@ use shm_types::contract::{self, Elem, Scalar};
 use shm_types::{
     Candidate, DeadlineEvent, DepthFrame, Detection, Detections, FrameVisibility, Intrinsics,
     MAX_CANDIDATES, MAX_DETECTIONS, MAX_GRID_CELLS, MAX_HEIGHT, MAX_OBJECT_POINTS, MAX_OBJECTS,
-    MAX_SOPM_CELLS, MAX_WIDTH, NavGoal, NeckGoal, ObjectMap, OccupancyGrid, PlannerDecision, Pose3,
-    RobotState, Validate, ZeroValid, boxed_zeroed, class_name, grid_cell, mask_mode, miss_cause,
+    MAX_SOPM_CELLS, MAX_WIDTH, NavGoal, NeckGoal, NodeHealth, ObjectMap, OccupancyGrid,
+    PlannerDecision, Pose3, RobotState, Validate, ZeroValid, boxed_zeroed, class_name, grid_cell,
+    mask_mode, miss_cause,
 };
 use std::collections::HashMap;
 use std::sync::{LazyLock, Mutex};
@@ -355,6 +356,13 @@ fn valid_decision() -> Box<PlannerDecision> {
     d
 }
 
+fn valid_health() -> Box<NodeHealth> {
+    let mut h = boxed_zeroed::<NodeHealth>();
+    h.set_node_name("recorder");
+    while h.push_input("planner/decision", 7, 1, 2) {}
+    h
+}
+
 fn valid_visibility() -> Box<FrameVisibility> {
     let mut v = boxed_zeroed::<FrameVisibility>();
     v.count = MAX_OBJECTS as u32;
@@ -504,6 +512,16 @@ fn visibility_ok(v: &FrameVisibility) {
     }
 }
 
+fn health_ok(h: &NodeHealth) {
+    assert_eq!(h.inputs().len(), h.count as usize);
+    assert!(std::str::from_utf8(&h.node).is_ok());
+    assert!(
+        h.inputs()
+            .iter()
+            .all(|e| std::str::from_utf8(&e.topic).is_ok())
+    );
+}
+
 fn config(cases: u32) -> ProptestConfig {
     let cases = std::env::var("PROPTEST_CASES")
         .ok()
@@ -577,6 +595,11 @@ proptest! {
     fn frame_visibility(b in base(), p in patches()) {
         run("FrameVisibility", valid_visibility, visibility_ok, &b, &p);
     }
+
+    #[test]
+    fn node_health(b in base(), p in patches()) {
+        run("NodeHealth", valid_health, health_ok, &b, &p);
+    }
 }
 
 /// The patches reach every field: each message type's scalar list covers its whole size.
@@ -593,6 +616,7 @@ fn scalar_lists_cover_every_byte() {
         ("DeadlineEvent", std::mem::size_of::<DeadlineEvent>()),
         ("PlannerDecision", std::mem::size_of::<PlannerDecision>()),
         ("FrameVisibility", std::mem::size_of::<FrameVisibility>()),
+        ("NodeHealth", std::mem::size_of::<NodeHealth>()),
     ];
     for (name, size) in sizes {
         let width = |s: Scalar| match s {

@@ -15,6 +15,9 @@ pub const VISIBILITY: &str = "sim/visibility";
 pub const NAV_GRID: &str = "nav/grid";
 /// `ObjectMap` from the mapper.
 pub const MAP: &str = "map";
+/// `ObjectMap` from the launcher to a restarted mapper: the newest map the mapper published
+/// before it died (one sample per restart, kept as history for the late-joining mapper).
+pub const MAP_RESUME: &str = "map/resume";
 /// Exploration `OccupancyGrid` (from depth) from the mapper.
 pub const MAP_GRID: &str = "map/grid";
 /// `NavGoal` from the planner.
@@ -25,3 +28,6 @@ pub const NECK_GOAL: &str = "neck/goal";
 pub const DECISION: &str = "planner/decision";
 /// `DeadlineEvent` from the real-time threads.
 pub const DEADLINE: &str = "deadline";
+/// `NodeHealth` from every node host: heartbeat and input counts (the launcher's liveness
+/// check, and the run summary's per-topic invalid and overflow counts).
+pub const HEALTH: &str = "health";

@@ -20,6 +20,7 @@
 //! | `sparse.rs` | confident detections with few points (glass, far small objects) |
 //! | `flat.rs` | flat objects (phones) located by their box on the table top |
 //! | `publish.rs` | [`Mapper::write_map`], [`Mapper::write_grid`] |
+//! | `resume.rs` | [`Mapper::resume_from`]: a restarted mapper continues from its last published map |
 //! | [`grid`] | the exploration occupancy grid |
 //! | `mod.rs` | [`Mapper`]: the per-frame pipeline |
 //!
@@ -63,6 +64,7 @@ pub mod points;
 pub mod priors;
 mod publish;
 pub mod register;
+mod resume;
 pub mod segment;
 pub mod sopm;
 mod sparse;

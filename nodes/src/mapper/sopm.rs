@@ -323,6 +323,16 @@ impl Sopm {
         true
     }
 
+    /// Set cell `g`'s evidence directly: observed flag, occupied and free counts `n_o` (the
+    /// accumulated points `n_p` are taken as the occupied count). For resuming from a
+    /// published map (`resume.rs`).
+    pub(super) fn set_cell(&mut self, g: usize, observed: bool, occ: u32, free: u32) {
+        self.observed[g] = observed;
+        self.occ[g] = occ;
+        self.free[g] = free;
+        self.hits[g] = occ;
+    }
+
     /// Log-odds of a cell (eq. 8 summed over frames; `l_0` from `p_prior`).
     fn log_odds(&self, g: usize) -> f32 {
         let l = log_odds(self.params.p_prior)

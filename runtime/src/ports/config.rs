@@ -182,11 +182,13 @@ pub fn check_domain(s: &str) -> Result<(), &'static str> {
     }
 }
 
-/// The iceoryx2 file prefix of `domain` (checked by [`check_domain`]): `None` for the default
-/// domain (iceoryx2's own `iox2_`), else `vpsom<domain>-`. It never starts with `iox2_`, and the
-/// `-` ends the name, so listing one domain's files never matches another's.
-pub fn domain_prefix(domain: &str) -> Option<String> {
-    (!domain.is_empty()).then(|| format!("vpsom{domain}-"))
+/// The iceoryx2 file prefix of `domain` (checked by [`check_domain`]) for user `uid`: `None`
+/// for the default domain (the user's own `vpsom_u<uid>_`, see [`super::access`]), else
+/// `vpsom<domain>-u<uid>_`. No prefix is the start of another (the default has `_` where a
+/// domain's name starts, and `-` ends the domain's name), so listing one domain's files never
+/// matches another's.
+pub fn domain_prefix(domain: &str, uid: u32) -> Option<String> {
+    (!domain.is_empty()).then(|| format!("vpsom{domain}-u{uid}_"))
 }
 
 /// A topic name: like a namespace, plus `/` between non-empty parts (e.g. `robot/state`).

@@ -27,11 +27,13 @@
 //! | file | content |
 //! |---|---|
 //! | `mod.rs` | [`PortContext`] (node, naming, a topic's two services), [`list_services`] |
+//! | [`access`] | per-user iceoryx2 root directory and prefix: who may open a run's services |
 //! | `config.rs` | [`PortsConfig`] (`[ports]`), [`TopicOverride`], [`TopicSettings`], [`Overflow`] |
 //! | `publisher.rs` | [`Publisher`], [`Loan`], [`Stamp`], [`Sent`] |
 //! | `subscriber.rs` | [`Subscriber`], [`Received`] |
 //! | `error.rs` | one error type per operation, each keeping iceoryx2's error as its source |
 
+pub mod access;
 mod config;
 mod error;
 mod publisher;
@@ -97,10 +99,13 @@ pub fn set_domain(domain: &str) -> Result<(), ContextError> {
 }
 
 /// The iceoryx2 configuration used by every node we create: iceoryx2's built-in defaults, never
-/// a file (see the module docs), with the file prefix of the process's domain ([`set_domain`]).
+/// a file (see the module docs): the calling user's own root directory (made `0700`) and
+/// prefix ([`access`]), or, in a named domain ([`set_domain`]), that domain's prefix for this user.
 pub fn iceoryx2_config() -> iceoryx2::config::Config {
-    let mut c = iceoryx2::config::Config::default();
-    if let Some(prefix) = DOMAIN.get().and_then(|d| domain_prefix(d)) {
+    let uid = crate::os::euid();
+    access::ensure_private_root(uid);
+    let mut c = access::config_for_user(uid);
+    if let Some(prefix) = DOMAIN.get().and_then(|d| domain_prefix(d, uid)) {
         // A checked domain gives a valid file name.
         use iceoryx2::prelude::SemanticString as _;
         if let Ok(p) = iceoryx2::prelude::FileName::new(prefix.as_bytes()) {
@@ -392,6 +397,7 @@ mod tests {
             .collect();
         assert_eq!(seqs, vec![5, 6]);
         assert_eq!(sub.gaps(), 3, "seqs 2..=4 were overwritten");
+        assert_eq!(sub.received(), 3, "seqs 1, 5 and 6 were received");
     }
 
     #[test]

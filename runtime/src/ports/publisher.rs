@@ -2,7 +2,7 @@
 //! filled in place, the [`Stamp`] written into the header on [`Loan::send`], and what a send
 //! did ([`Sent`]).
 
-use super::error::{LoanError, PublisherError, SendError};
+use super::error::{ConnectError, LoanError, PublisherError, SendError};
 use super::{Overflow, Services, TopicSettings};
 use iceoryx2::port::notifier::Notifier;
 use iceoryx2::port::{BackpressureAction, BackpressureInfo};
@@ -118,6 +118,19 @@ impl<T: Message> Publisher<T> {
     /// Sequence number of the last sample sent (0 before the first).
     pub fn last_seq(&self) -> u64 {
         self.seq.get()
+    }
+
+    /// Connect to subscribers that appeared since the last send, and hand them the topic's
+    /// history (`history_size`): iceoryx2 delivers history only from the publisher's side, so a
+    /// publisher that sends rarely calls this regularly for late joiners to get it.
+    pub fn update_connections(&self) -> Result<(), ConnectError> {
+        use iceoryx2::port::update_connections::UpdateConnections;
+        self.port
+            .update_connections()
+            .map_err(|source| ConnectError {
+                service: self.services.name.clone(),
+                source,
+            })
     }
 
     /// Subscribers currently connected to the topic (any process).

@@ -1,5 +1,5 @@
-//! The receiving side: [`Subscriber`] (one per topic and consumer, with its sequence-gap and
-//! invalid-sample counts) and the [`Received`] sample it lends out of shared memory.
+//! The receiving side: [`Subscriber`] (one per topic and consumer, with its received,
+//! sequence-gap and invalid-sample counts) and the [`Received`] sample it lends out of shared memory.
 //!
 //! Every sample is validated on receipt ([`shm_types::Validate`], allocation-free while the
 //! sample is valid): one that fails is returned to its publisher unread, counted, and logged at
@@ -26,6 +26,7 @@ pub struct Subscriber<T: Message> {
     services: Services<T>,
     last_seq: Cell<Option<u64>>,
     gaps: Cell<u64>,
+    received: Cell<u64>,
     invalid: Cell<u64>,
     last_invalid_log: Cell<Option<Instant>>,
 }
@@ -94,6 +95,7 @@ impl<T: Message> Subscriber<T> {
             services: sv,
             last_seq: Cell::new(None),
             gaps: Cell::new(0),
+            received: Cell::new(0),
             invalid: Cell::new(0),
             last_invalid_log: Cell::new(None),
         })
@@ -113,7 +115,10 @@ impl<T: Message> Subscriber<T> {
             let r = Received { sample };
             self.track(r.header().seq);
             match r.validate() {
-                Ok(()) => return Ok(Some(r)),
+                Ok(()) => {
+                    self.received.set(self.received.get() + 1);
+                    return Ok(Some(r));
+                }
                 Err(e) => self.reject(r.header().seq, &e),
             }
         }
@@ -135,6 +140,12 @@ impl<T: Message> Subscriber<T> {
                 self.invalid.get()
             );
         }
+    }
+
+    /// Valid samples received (handed to the consumer, including those [`Subscriber::latest`]
+    /// drained).
+    pub fn received(&self) -> u64 {
+        self.received.get()
     }
 
     /// Samples dropped on receipt because they failed validation.

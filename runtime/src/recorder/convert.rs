@@ -13,8 +13,9 @@ use foxglove::messages::{
 };
 use glam::{DMat3, DQuat, DVec3};
 use shm_types::{
-    DeadlineEvent, DepthFrame, Detections, MapObject, NavGoal, NeckGoal, ObjectMap, OccupancyGrid,
-    PlannerDecision, RobotState, class_name, decision_kind, goal_kind, miss_cause, planner_state,
+    DeadlineEvent, DepthFrame, Detections, MapObject, NavGoal, NeckGoal, NodeHealth, ObjectMap,
+    OccupancyGrid, PlannerDecision, RobotState, class_name, decision_kind, goal_kind, miss_cause,
+    planner_state,
 };
 
 // ---- producer-side copies (no allocation) --------------------------------------------------
@@ -555,6 +556,28 @@ pub fn neck_goal(g: &NeckGoal) -> own::NeckGoal {
         yaw: g.yaw,
         pitch: g.pitch,
         score: g.score,
+    }
+}
+
+/// [`own::NodeHealth`].
+pub fn health(h: &NodeHealth) -> own::NodeHealth {
+    own::NodeHealth {
+        seq: h.header.seq,
+        stamp_ns: h.header.stamp_ns,
+        sim_time_ns: h.header.sim_time_ns,
+        node: h.node_name().into(),
+        pid: h.pid,
+        steps: h.steps,
+        inputs: h
+            .inputs()
+            .iter()
+            .map(|i| own::InputHealth {
+                topic: i.topic_name().into(),
+                received: i.received,
+                invalid: i.invalid,
+                overflow: i.overflow,
+            })
+            .collect(),
     }
 }
 

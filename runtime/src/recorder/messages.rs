@@ -143,6 +143,38 @@ pub struct NeckGoal {
     pub score: f32,
 }
 
+/// One input of a node, as its heartbeat counts it ([`NodeHealth::inputs`]).
+#[derive(Debug, Clone, Default, PartialEq, Encode, Serialize, Deserialize)]
+pub struct InputHealth {
+    /// Topic.
+    pub topic: String,
+    /// Valid samples received.
+    pub received: u64,
+    /// Samples dropped on receipt because they failed validation.
+    pub invalid: u64,
+    /// Samples overwritten before the node read them (sequence gaps).
+    pub overflow: u64,
+}
+
+/// A node's heartbeat with its input counts (`/runtime/health`).
+#[derive(Debug, Clone, Default, PartialEq, Encode, Serialize, Deserialize)]
+pub struct NodeHealth {
+    /// Sequence number (the heartbeat count of this node instance).
+    pub seq: u64,
+    /// Monotonic stamp, ns.
+    pub stamp_ns: u64,
+    /// Simulated/robot time, ns (the recorder's newest robot state).
+    pub sim_time_ns: u64,
+    /// Node role.
+    pub node: String,
+    /// Process id.
+    pub pid: u32,
+    /// Steps the node has run.
+    pub steps: u64,
+    /// Per input topic.
+    pub inputs: Vec<InputHealth>,
+}
+
 /// A deadline-monitor event (`/runtime/deadline`).
 #[derive(Debug, Clone, Default, PartialEq, Encode, Serialize, Deserialize)]
 pub struct DeadlineEvent {

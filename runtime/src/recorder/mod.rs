@@ -80,6 +80,7 @@
 //! | `/planner/decisions` | [`messages::PlannerDecision`] (every F(v) term) | same |
 //! | `/planner/nav_goal`, `/planner/neck_goal` | [`messages::NavGoal`], [`messages::NeckGoal`] | `record_*_goal` |
 //! | `/runtime/deadline` | [`messages::DeadlineEvent`] | [`RecorderHandle::record_deadline`] |
+//! | `/runtime/health` | [`messages::NodeHealth`] | [`RecorderHandle::record_health`] |
 //! | `/runtime/latency` | [`messages::LatencySummary`] | [`RecorderHandle::record_latency`] |
 //! | `/log` | `foxglove.Log` | [`RecorderHandle::log`] |
 //! | `/metrics` | [`messages::Metrics`] | [`RecorderHandle::record_metrics`] |
@@ -107,7 +108,7 @@ use crossbeam::channel::{Receiver, Sender, TrySendError};
 use crossbeam::queue::ArrayQueue;
 use serde::{Deserialize, Serialize};
 use shm_types::{
-    DeadlineEvent, DepthFrame, Detections, NavGoal, NeckGoal, ObjectMap, OccupancyGrid,
+    DeadlineEvent, DepthFrame, Detections, NavGoal, NeckGoal, NodeHealth, ObjectMap, OccupancyGrid,
     PlannerDecision, RobotState, ZeroValid, boxed_zeroed,
 };
 use std::path::{Path, PathBuf};
@@ -420,6 +421,8 @@ pub enum Kind {
     NeckGoal,
     /// Deadline-monitor events.
     Deadline,
+    /// Node heartbeats with their input counts.
+    Health,
     /// Latency summaries.
     Latency,
     /// Log lines.
@@ -430,7 +433,7 @@ pub enum Kind {
 
 impl Kind {
     /// Every kind, in index order.
-    pub const ALL: [Kind; 13] = [
+    pub const ALL: [Kind; 14] = [
         Kind::Depth,
         Kind::Detections,
         Kind::NavGrid,
@@ -441,6 +444,7 @@ impl Kind {
         Kind::NavGoal,
         Kind::NeckGoal,
         Kind::Deadline,
+        Kind::Health,
         Kind::Latency,
         Kind::Log,
         Kind::Metrics,
@@ -461,6 +465,7 @@ impl Kind {
             Kind::NavGoal => topic::NAV_GOAL,
             Kind::NeckGoal => topic::NECK_GOAL,
             Kind::Deadline => topic::DEADLINE,
+            Kind::Health => topic::HEALTH,
             Kind::Latency => topic::LATENCY,
             Kind::Log => topic::LOG,
             Kind::Metrics => topic::METRICS,
@@ -574,6 +579,7 @@ enum Msg {
     NavGoal(NavGoal),
     NeckGoal(NeckGoal),
     Deadline(DeadlineEvent),
+    Health(Box<NodeHealth>),
     Latency(LatencySummary),
     Log {
         time_ns: u64,
@@ -780,6 +786,11 @@ impl RecorderHandle {
     /// Record a deadline-monitor event (`/runtime/deadline`).
     pub fn record_deadline(&self, e: &DeadlineEvent) {
         self.push(Kind::Deadline, Msg::Deadline(*e));
+    }
+
+    /// Record a node's heartbeat and input counts (`/runtime/health`), a few per second.
+    pub fn record_health(&self, h: &NodeHealth) {
+        self.push(Kind::Health, Msg::Health(Box::new(*h)));
     }
 
     /// Record a latency summary (`/runtime/latency`), about once a second.

@@ -48,6 +48,8 @@ pub mod topic {
     pub const NECK_GOAL: &str = "/planner/neck_goal";
     /// Deadline-monitor events.
     pub const DEADLINE: &str = "/runtime/deadline";
+    /// Node heartbeats with their per-input counts.
+    pub const HEALTH: &str = "/runtime/health";
     /// Per-node latency summaries.
     pub const LATENCY: &str = "/runtime/latency";
     /// Log lines.
@@ -107,6 +109,7 @@ pub fn channels() -> Vec<ChannelDef> {
         def::<own::NavGoal>(NAV_GOAL),
         def::<own::NeckGoal>(NECK_GOAL),
         def::<own::DeadlineEvent>(DEADLINE),
+        def::<own::NodeHealth>(HEALTH),
         def::<own::LatencySummary>(LATENCY),
         def::<fg::Log>(LOG),
         def::<own::Metrics>(METRICS),

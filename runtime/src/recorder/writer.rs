@@ -367,6 +367,10 @@ impl WriterState {
                 let (t, p) = (e.header.sim_time_ns, e.header.stamp_ns);
                 self.emit(topic::DEADLINE, t, p, || convert::deadline(&e))?;
             }
+            Msg::Health(h) => {
+                let (t, p) = (h.header.sim_time_ns, h.header.stamp_ns);
+                self.emit(topic::HEALTH, t, p, || convert::health(&h))?;
+            }
             Msg::Latency(s) => {
                 self.emit(topic::LATENCY, s.time_ns, s.time_ns, || {
                     convert::latency(&s)

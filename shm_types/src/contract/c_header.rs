@@ -142,6 +142,20 @@ pub fn c_header() -> String {
         "#define VPSOM_USER_HEADER_TYPE_NAME \"{}\"",
         super::USER_HEADER_TYPE_NAME
     );
+    let _ = writeln!(
+        h,
+        "/* iceoryx2 global.root-path and global.prefix of a run: printf formats of the uid. */"
+    );
+    let _ = writeln!(
+        h,
+        "#define VPSOM_IOX2_ROOT_FMT \"{}\"",
+        super::IOX2_ROOT_FMT
+    );
+    let _ = writeln!(
+        h,
+        "#define VPSOM_IOX2_PREFIX_FMT \"{}\"",
+        super::IOX2_PREFIX_FMT
+    );
     let all = types();
     for t in topics() {
         let layout = all.iter().find(|l| l.name == t.payload);

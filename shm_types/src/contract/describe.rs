@@ -51,7 +51,8 @@ struct_kind!(
     Detection,
     MapObject,
     Candidate,
-    ObjectVisibility
+    ObjectVisibility,
+    InputHealth
 );
 
 /// A field whose type `T` is inferred from the accessor `get`.
@@ -279,6 +280,20 @@ pub(super) fn types() -> Vec<TypeLayout> {
             reserved: "pad",
             items: "struct",
         }),
+        layout!(InputHealth {
+            received: "count",
+            invalid: "count",
+            overflow: "count",
+            topic: "utf8",
+        }),
+        layout!(NodeHealth {
+            header: "struct",
+            steps: "count",
+            pid: "id",
+            count: "count",
+            node: "utf8",
+            inputs: "struct",
+        }),
     ]
 }
 
@@ -326,6 +341,12 @@ pub(super) static TOPICS: &[Topic] = &[
         doc: "sparse object map",
     },
     Topic {
+        topic: "map/resume",
+        payload: "ObjectMap",
+        producer: "launcher",
+        doc: "the newest map, handed to a restarted mapper (history 1)",
+    },
+    Topic {
         topic: "map/grid",
         payload: "OccupancyGrid",
         producer: "mapper",
@@ -355,6 +376,12 @@ pub(super) static TOPICS: &[Topic] = &[
         producer: "planner (real-time threads)",
         doc: "one record per periodic executor cycle",
     },
+    Topic {
+        topic: "health",
+        payload: "NodeHealth",
+        producer: "every node host (a few Hz)",
+        doc: "heartbeat and per-input received / invalid / overflow counts (the launcher's liveness check)",
+    },
 ];
 
 macro_rules! constants {
@@ -369,6 +396,7 @@ macro_rules! constants {
 
 /// The capacity constants, as a module so that `constants!` can name them like the enums.
 mod capacity {
+    pub use crate::{HEALTH_NODE_LEN, HEALTH_TOPIC_LEN, MAX_HEALTH_INPUTS};
     pub use crate::{
         MAX_CANDIDATES, MAX_DETECTIONS, MAX_GRID_CELLS, MAX_HEIGHT, MAX_OBJECT_POINTS, MAX_OBJECTS,
         MAX_PIXELS, MAX_SOPM_CELLS, MAX_WIDTH, THREAD_NAME_LEN,
@@ -390,6 +418,9 @@ pub(super) fn constants() -> Vec<Constant> {
             MAX_GRID_CELLS,
             MAX_CANDIDATES,
             THREAD_NAME_LEN,
+            MAX_HEALTH_INPUTS,
+            HEALTH_TOPIC_LEN,
+            HEALTH_NODE_LEN,
             COCO_CLASS_COUNT,
         ],
         mask_mode: [BOXES, MASKS],

@@ -43,6 +43,22 @@ pub const SERVICE_ROOT: &str = "vpsom";
 /// iceoryx2's type name of the (absent) user header of every service.
 pub const USER_HEADER_TYPE_NAME: &str = "()";
 
+/// iceoryx2 root directory of user `uid` (iceoryx2's `global.root-path`): every user's
+/// services live apart (see `runtime::ports::access`). Format: [`IOX2_ROOT_FMT`] with the uid.
+pub fn iceoryx2_root_path(uid: u32) -> String {
+    format!("/tmp/vpsom-iox2-u{uid}/")
+}
+
+/// iceoryx2 file prefix of user `uid` (`global.prefix`). Format: [`IOX2_PREFIX_FMT`].
+pub fn iceoryx2_prefix(uid: u32) -> String {
+    format!("vpsom_u{uid}_")
+}
+
+/// `printf` format of [`iceoryx2_root_path`] (one unsigned: the uid).
+pub const IOX2_ROOT_FMT: &str = "/tmp/vpsom-iox2-u%u/";
+/// `printf` format of [`iceoryx2_prefix`].
+pub const IOX2_PREFIX_FMT: &str = "vpsom_u%u_";
+
 /// Full iceoryx2 service name of `topic` in a run's `namespace`.
 pub fn service_name(namespace: &str, topic: &str) -> String {
     format!("{SERVICE_ROOT}/{namespace}/{topic}")

@@ -95,6 +95,20 @@ pub fn python_module() -> String {
          \x20   \"\"\"Full iceoryx2 service name of `topic` in a run's `namespace`.\"\"\"\n\
          \x20   return f\"{SERVICE_ROOT}/{namespace}/{topic}\"\n\n\n",
     );
+    let root = super::IOX2_ROOT_FMT.replace("%u", "{uid}");
+    let prefix = super::IOX2_PREFIX_FMT.replace("%u", "{uid}");
+    let _ = writeln!(
+        p,
+        "def iceoryx2_config(iox2, uid=None):\n\
+         \x20   \"\"\"The iceoryx2 config a run of user `uid` (default: this process's) uses: its own\n\
+         \x20   root directory and prefix (services are owner-only). Pass it to NodeBuilder.config().\"\"\"\n\
+         \x20   import os\n\
+         \x20   uid = os.geteuid() if uid is None else uid\n\
+         \x20   c = iox2.config.default()\n\
+         \x20   c.global_cfg.root_path = iox2.Path.new(f\"{root}\")\n\
+         \x20   c.global_cfg.prefix = iox2.FileName.new(f\"{prefix}\")\n\
+         \x20   return c\n\n"
+    );
     let _ = writeln!(p, "# ---- capacities and enum values ----");
     for c in constants() {
         let name = if c.group == "capacity" {

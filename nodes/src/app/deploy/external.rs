@@ -275,11 +275,13 @@ mod tests {
             topics::VISIBILITY,
             topics::NAV_GRID,
             topics::MAP,
+            topics::MAP_RESUME,
             topics::MAP_GRID,
             topics::NAV_GOAL,
             topics::NECK_GOAL,
             topics::DECISION,
             topics::DEADLINE,
+            topics::HEALTH,
         ];
         let contract: Vec<&str> = shm_types::contract::topics()
             .iter()

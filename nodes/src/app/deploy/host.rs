@@ -6,19 +6,24 @@
 //!
 //! Lifecycle of a host (the hooks other than `step` default to nothing):
 //! ```text
-//! make()  → start()  → { step() → health() }*  → finish()
+//! make()  → start()  → { step() → health() → heartbeat }*  → finish()
 //! (on the stepping thread)          (until Done, stop, or an error: then no finish)
 //! ```
+//! The heartbeat ([`NodeHost::heartbeat`]): after each step the driver publishes the node's
+//! `NodeHealth` (with [`NodeHost::inputs`]) once per period, from the stepping thread, so a
+//! node stuck inside a step falls silent and the launcher restarts it.
 //! On an executor thread ([`Pace::Periodic`]) the driver adds nothing to a cycle but the two
 //! calls: no allocation, no lock (the host is built on that thread, so ports need not be `Send`).
 
+use super::health::Heartbeat;
 use runtime::clock::{Clock, MonotonicClock};
 use runtime::executor::{Control, Executor, ExecutorConfig, ExecutorError, apply_sched};
+use runtime::ports::PortContext;
 use runtime::ports::{
-    ContextError, LoanError, PublisherError, ReceiveError, SendError, Stamp, SubscriberError,
-    WaitError,
+    ConnectError, ContextError, LoanError, PublisherError, ReceiveError, SendError, Stamp,
+    SubscriberError, WaitError,
 };
-use shm_types::DeadlineEvent;
+use shm_types::{DeadlineEvent, NodeHealth};
 use std::error::Error;
 use std::fmt;
 use std::sync::Arc;
@@ -52,6 +57,9 @@ pub enum HostError {
     /// Waiting for data failed.
     #[error(transparent)]
     Wait(#[from] WaitError),
+    /// Connecting to a topic's other ports failed.
+    #[error(transparent)]
+    Connect(#[from] ConnectError),
     /// The executor could not start, or its thread panicked.
     #[error(transparent)]
     Executor(#[from] ExecutorError),
@@ -116,6 +124,16 @@ pub trait NodeHost {
     fn health(&mut self) -> Result<(), HostError> {
         Ok(())
     }
+
+    /// The node's heartbeat: the port context to publish `NodeHealth` with, and the period;
+    /// `None` = no heartbeat.
+    fn heartbeat(&self) -> Option<(&PortContext, Duration)> {
+        None
+    }
+
+    /// List every input subscriber into the node's health report
+    /// ([`report_input`](super::health::report_input) per subscriber).
+    fn inputs(&self, _report: &mut NodeHealth) {}
 
     /// After the last step (not after an error): flush and report.
     fn finish(self) -> Result<(), HostError>
@@ -228,20 +246,29 @@ where
                 let report = apply_sched(name, &cfg);
                 eprintln!("{name}: {report}");
             }
-            on_this_thread(stop, None, make)
+            on_this_thread(name, stop, None, make)
         }
-        Pace::Poll { idle } => on_this_thread(stop, Some(idle), make),
+        Pace::Poll { idle } => on_this_thread(name, stop, Some(idle), make),
     }
 }
 
-/// `step` then `health`.
-fn step_once<H: NodeHost>(host: &mut H, stop: &AtomicBool) -> Result<Flow, HostError> {
+/// `step`, `health`, then the heartbeat.
+fn step_once<H: NodeHost>(
+    name: &str,
+    host: &mut H,
+    beat: Option<&mut Heartbeat>,
+    stop: &AtomicBool,
+) -> Result<Flow, HostError> {
     let flow = host.step(stop)?;
     host.health()?;
+    if let Some(b) = beat {
+        b.tick(name, host)?;
+    }
     Ok(flow)
 }
 
 fn on_this_thread<H, M>(
+    name: &str,
     stop: &AtomicBool,
     idle: Option<Duration>,
     make: M,
@@ -251,10 +278,11 @@ where
     M: FnOnce() -> Result<H, HostError>,
 {
     let mut host = make()?;
+    let mut beat = Heartbeat::of(&host)?;
     host.start();
     let mut finished = false;
     while !stop.load(Ordering::Relaxed) {
-        match step_once(&mut host, stop)? {
+        match step_once(name, &mut host, beat.as_mut(), stop)? {
             Flow::Busy => {}
             Flow::Idle => {
                 if let Some(idle) = idle {
@@ -278,6 +306,7 @@ where
 struct OnThread<H: NodeHost> {
     name: &'static str,
     host: Option<H>,
+    beat: Option<Heartbeat>,
     failed: bool,
 }
 
@@ -309,26 +338,28 @@ where
         builder = builder.events(events);
     }
     let exec = builder.spawn(move || {
-        let host = match make() {
-            Ok(mut h) => {
+        let built = make().and_then(|h| Ok((Heartbeat::of(&h)?, h)));
+        let (beat, host) = match built {
+            Ok((beat, mut h)) => {
                 h.start();
-                Some(h)
+                (beat, Some(h))
             }
             Err(e) => {
                 eprintln!("{name}: {}", Chain(&e));
-                None
+                (None, None)
             }
         };
         let mut on = OnThread {
             name,
             host,
+            beat,
             failed: false,
         };
         move |_cycle| {
             let Some(h) = on.host.as_mut() else {
                 return Control::Stop;
             };
-            match step_once(h, &stop2) {
+            match step_once(name, h, on.beat.as_mut(), &stop2) {
                 Ok(Flow::Busy | Flow::Idle) => Control::Continue,
                 Ok(Flow::Done) => {
                     finished2.store(true, Ordering::Relaxed);

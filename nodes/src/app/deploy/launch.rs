@@ -8,13 +8,14 @@
 //! written, scoring is skipped and the outcome says so.
 
 use super::external::{self, ExternalInputs};
+use super::health::{HealthWatch, InputAccount};
 use super::host;
 use crate::app::{lockstep, topics};
 use crate::config::Config;
 use crate::eval::{self, MatchParams, RunInfo, SessionLog};
 use crate::sim::Scene;
 use anyhow::Context;
-use runtime::launcher::{ChildEvent, ChildSpec, Launcher};
+use runtime::launcher::{ChildEvent, ChildSpec, Launcher, Liveness};
 use runtime::ports::PortContext;
 use shm_types::{
     DeadlineEvent, FrameVisibility, NavGoal, ObjectMap, PlannerDecision, RobotState, boxed_zeroed,
@@ -112,6 +113,13 @@ pub struct RunOutcome {
     pub planner_activity: (u64, u64),
     /// What the tunnel to the other host moved (`--link`).
     pub link: Option<super::link::LinkReport>,
+    /// Every node's inputs from its heartbeats (`health`): received, invalid and overflow
+    /// counts per topic, summed over the node's restarts.
+    pub inputs: Vec<InputAccount>,
+    /// What the launcher noticed about the nodes (deaths, hangs, restarts), in order.
+    pub node_events: Vec<String>,
+    /// Heartbeats the launcher received, and dropped as invalid.
+    pub heartbeats: (u64, u64),
     /// Why the run ended.
     pub reason: String,
     /// Whether a node failed for good.
@@ -149,7 +157,22 @@ impl RunOutcome {
         if let Some(l) = &self.link {
             t += &l.rows();
         }
-        t
+        for a in &self.inputs {
+            t += &format!(
+                "| {} ← {}: received / invalid / overflow | {} / {} / {} |\n",
+                a.node, a.topic, a.received, a.invalid, a.overflow
+            );
+        }
+        t += &format!(
+            "| heartbeats received / invalid (launcher ← health) | {} / {} |\n",
+            self.heartbeats.0, self.heartbeats.1
+        );
+        let events = if self.node_events.is_empty() {
+            "none".to_string()
+        } else {
+            self.node_events.join("; ")
+        };
+        t + &format!("| node faults (deaths, hangs, restarts) | {events} |\n")
     }
 }
 
@@ -204,6 +227,14 @@ pub fn run(args: &RunArgs, cfg: &Config, exe: &Path) -> anyhow::Result<RunOutcom
     if let Some(l) = &link {
         l.wait_for_peer(Duration::from_secs_f64(cfg.link.wait_for_peer_s), &stop);
     }
+    let mut health = HealthWatch::new(&ctx)?;
+    // A restarted mapper resumes from the newest map heard here (`[run] resume_map`).
+    let resume = ctx.publisher::<ObjectMap>(topics::MAP_RESUME)?;
+    let mut node_events = Vec::new();
+    let liveness = Liveness {
+        timeout: Duration::from_secs_f64(cfg.run.hang_timeout_s),
+        startup: Duration::from_secs_f64(cfg.run.start_timeout_s),
+    };
     for &role in &args.nodes {
         launcher.spawn(ChildSpec {
             name: role.into(),
@@ -211,6 +242,7 @@ pub fn run(args: &RunArgs, cfg: &Config, exe: &Path) -> anyhow::Result<RunOutcom
             args: args.child_args(role),
             max_restarts: cfg.run.max_restarts,
             inherit_stdout: false,
+            liveness: Some(liveness),
         })?;
     }
     let start = Instant::now();
@@ -261,8 +293,27 @@ pub fn run(args: &RunArgs, cfg: &Config, exe: &Path) -> anyhow::Result<RunOutcom
             // No sim: the robot's clock is the run's.
             sim_ns = sim_ns.max(t);
         }
+        health.poll(&mut launcher)?;
+        // Late joiners (a restarting mapper) get the history only from the publisher's side.
+        resume.update_connections()?;
         for ev in launcher.poll() {
             eprintln!("\n{ev}");
+            node_events.push(ev.to_string());
+            if let ChildEvent::Restarted { ref name, .. } = ev
+                && name == "mapper"
+                && cfg.run.resume_map
+            {
+                let mut m = resume.loan()?;
+                m.copy_from(&map);
+                m.send(runtime::ports::Stamp {
+                    source_ns: 0,
+                    sim_ns: map.header.sim_time_ns,
+                })?;
+                eprintln!(
+                    "handed the restarted mapper its last map: {} objects",
+                    map.objects().len()
+                );
+            }
             match ev {
                 ChildEvent::Failed { .. } => failed = true,
                 ChildEvent::Finished { ref name } if name == "planner" && final_state.is_none() => {
@@ -319,7 +370,8 @@ pub fn run(args: &RunArgs, cfg: &Config, exe: &Path) -> anyhow::Result<RunOutcom
             eprintln!("  {name}: {e}");
         }
     }
-    // Read what arrived while the nodes stopped (the final map in particular).
+    // Read what arrived while the nodes stopped (the final map, the last heartbeats).
+    health.poll(&mut launcher)?;
     if let Some(m) = map_sub.latest()? {
         map.copy_from(&m);
     }
@@ -371,6 +423,9 @@ pub fn run(args: &RunArgs, cfg: &Config, exe: &Path) -> anyhow::Result<RunOutcom
             mapper_frames,
             planner_activity: (lbv_cycles, goals),
             link,
+            inputs: health.accounts(),
+            heartbeats: health.heartbeats(),
+            node_events,
             reason,
             failed,
         });
@@ -397,6 +452,9 @@ pub fn run(args: &RunArgs, cfg: &Config, exe: &Path) -> anyhow::Result<RunOutcom
         mapper_frames,
         planner_activity: (lbv_cycles, goals),
         link,
+        inputs: health.accounts(),
+        heartbeats: health.heartbeats(),
+        node_events,
         reason,
         failed,
     })

@@ -1,6 +1,12 @@
 //! `vpsom node mapper`: the mapper on the process's main thread, woken by depth frames.
+//!
+//! Restarted by the launcher (`VPSOM_RESTART` = n > 0) with `[run] resume_map`, it first waits
+//! (up to [`RESUME_WAIT`]) for the launcher's copy of the last map it published, the n-th
+//! sample on `map/resume`, and continues from it ([`Mapper::resume_from`]) instead of from an
+//! empty map.
 
 use super::RunArgs;
+use super::health::report_input;
 use super::host::{self, Flow, HostError, NodeHost, Pace};
 use crate::app::topics;
 use crate::config::Config;
@@ -8,7 +14,7 @@ use crate::mapper::{Mapper, MapperError};
 use runtime::clock::MonotonicClock;
 use runtime::executor::{ExecutorConfig, SchedPolicy};
 use runtime::ports::{PortContext, Publisher, Received, Subscriber};
-use shm_types::{DepthFrame, Detections, ObjectMap, OccupancyGrid, RobotState};
+use shm_types::{DepthFrame, Detections, NodeHealth, ObjectMap, OccupancyGrid, RobotState};
 use std::sync::atomic::{AtomicBool, Ordering};
 use std::time::{Duration, Instant};
 
@@ -52,14 +58,32 @@ struct MapperHost {
     counts: FrameCounts,
     /// Simulated time of the newest frame.
     last_t: u64,
-    _ctx: PortContext,
+    ctx: PortContext,
+    health_period: Duration,
+}
+
+/// Longest wait of a restarted mapper for the map it resumes from.
+pub const RESUME_WAIT: Duration = Duration::from_secs(5);
+
+/// How many times the launcher has restarted this process (0: first start, or no launcher).
+fn restart_number() -> u64 {
+    std::env::var(runtime::launcher::RESTART_ENV)
+        .ok()
+        .and_then(|v| v.parse().ok())
+        .unwrap_or(0)
 }
 
 impl MapperHost {
     fn new(cfg: &Config, ns: &str) -> Result<Self, HostError> {
         let clock = MonotonicClock::new();
         let ctx = PortContext::with_namespace(&cfg.ports, "mapper", ns)?;
-        Ok(Self {
+        let restart = restart_number();
+        let resume = if restart > 0 && cfg.run.resume_map {
+            Some(ctx.subscriber::<ObjectMap>(topics::MAP_RESUME)?)
+        } else {
+            None
+        };
+        let mut host = Self {
             clock,
             depth: ctx.subscriber(topics::DEPTH)?,
             dets: ctx.subscriber(topics::DETECTIONS)?,
@@ -73,8 +97,48 @@ impl MapperHost {
             pending: None,
             counts: FrameCounts::default(),
             last_t: 0,
-            _ctx: ctx,
-        })
+            ctx,
+            health_period: Duration::from_secs_f64(1.0 / cfg.run.health_hz),
+        };
+        if let Some(sub) = resume {
+            host.resume(&sub, restart)?;
+        }
+        Ok(host)
+    }
+
+    /// Continue from the `restart`-th map the launcher handed over on `map/resume` (earlier
+    /// ones, still in its history, are older). Polled: history arrives without an event.
+    fn resume(&mut self, sub: &Subscriber<ObjectMap>, restart: u64) -> Result<(), HostError> {
+        let deadline = Instant::now() + RESUME_WAIT;
+        loop {
+            if let Some(m) = sub.latest()?
+                && m.header.seq >= restart
+            {
+                let n = self.mapper.resume_from(&m);
+                (
+                    self.counts.integrated,
+                    self.counts.rejected,
+                    self.counts.unmatched,
+                ) = (m.frames_integrated, m.frames_rejected, m.frames_unmatched);
+                self.last_t = m.header.sim_time_ns;
+                eprintln!(
+                    "mapper: restart {restart}: resumed from the last published map ({n} objects, \
+                     frame {}, {:.1} s)",
+                    m.last_frame_seq,
+                    m.header.sim_time_ns as f64 * 1e-9
+                );
+                return Ok(());
+            }
+            if Instant::now() >= deadline {
+                eprintln!(
+                    "mapper: restart {restart}: no map to resume from on {} after {RESUME_WAIT:?}; \
+                     starting empty",
+                    topics::MAP_RESUME
+                );
+                return Ok(());
+            }
+            std::thread::sleep(Duration::from_millis(10));
+        }
     }
 
     /// The detections of frame `seq`: they follow it closely; older ones are skipped, a newer
@@ -155,12 +219,27 @@ impl NodeHost for MapperHost {
             }
         }
         let t = frame.header.sim_time_ns;
+        if t < self.last_t {
+            // The robot's clock went back (a restarted sim starts at 0): publish at once and
+            // keep the map period on the new clock.
+            self.next_map = t;
+        }
         self.last_t = t;
         if t >= self.next_map {
             self.publish(t)?;
             self.next_map = t + self.map_period;
         }
         Ok(Flow::Busy)
+    }
+
+    fn heartbeat(&self) -> Option<(&PortContext, Duration)> {
+        Some((&self.ctx, self.health_period))
+    }
+
+    fn inputs(&self, h: &mut NodeHealth) {
+        report_input(h, topics::DEPTH, &self.depth);
+        report_input(h, topics::DETECTIONS, &self.dets);
+        report_input(h, topics::STATE, &self.state_sub);
     }
 
     /// On a clean stop, one last map: what was integrated after the last periodic one, and the

@@ -7,6 +7,7 @@
 //! | file | content |
 //! |---|---|
 //! | [`host`] | the node-hosting abstraction: [`NodeHost`](host::NodeHost) (start → step → health → finish) and [`drive`](host::drive), the one loop around every node (stop flag, thread and pace, timing, errors); [`HostError`] |
+//! | `health` | [`Heartbeat`](health) of every node (`NodeHealth` on `health`), the launcher's watch of them, [`InputAccount`] |
 //! | `sim` | [`sim_node`]: the simulator, periodic executor thread at `rates.state_hz` |
 //! | `mapper` | [`mapper_node`]: the mapper, main thread, woken by depth frames |
 //! | `planner` | [`planner_node`]: the LBV on the deadline-monitored executor, GBV rounds and the GBV load on the worker pool |
@@ -21,6 +22,7 @@
 //! time (`sim_time_ns`).
 
 mod external;
+mod health;
 pub mod host;
 mod launch;
 pub mod link;
@@ -30,6 +32,7 @@ mod recorder;
 mod sim;
 
 pub use external::{ExternalInputs, REPORT_EVERY, ROLES, external_inputs, parse_nodes};
+pub use health::{InputAccount, report_input};
 pub use host::HostError;
 pub use launch::{RunArgs, RunOutcome, run, run_config};
 pub use mapper::mapper_node;

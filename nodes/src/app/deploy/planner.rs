@@ -3,6 +3,7 @@
 //! deadline testing ([`GbvLoad`]).
 
 use super::RunArgs;
+use super::health::report_input;
 use super::host::{self, Flow, HostError, NodeHost, Pace, Periodic};
 use crate::app::topics;
 use crate::config::Config;
@@ -13,8 +14,8 @@ use runtime::executor::{EventTrace, ExecutorConfig};
 use runtime::pool::WorkerPool;
 use runtime::ports::{PortContext, Publisher, Received, Stamp, Subscriber};
 use shm_types::{
-    DeadlineEvent, NavGoal, NeckGoal, ObjectMap, OccupancyGrid, PlannerDecision, RobotState,
-    boxed_zeroed, decision_kind, planner_state,
+    DeadlineEvent, NavGoal, NeckGoal, NodeHealth, ObjectMap, OccupancyGrid, PlannerDecision,
+    RobotState, boxed_zeroed, decision_kind, planner_state,
 };
 use std::sync::atomic::AtomicBool;
 use std::time::{Duration, Instant};
@@ -183,7 +184,8 @@ struct PlannerHost {
     deadline_pub: Publisher<DeadlineEvent>,
     events: crossbeam::channel::Receiver<DeadlineEvent>,
     outcome_file: std::path::PathBuf,
-    _ctx: PortContext,
+    ctx: PortContext,
+    health_period: Duration,
 }
 
 impl PlannerHost {
@@ -220,7 +222,8 @@ impl PlannerHost {
             deadline_pub: ctx.publisher(topics::DEADLINE)?,
             events,
             outcome_file,
-            _ctx: ctx,
+            ctx,
+            health_period: Duration::from_secs_f64(1.0 / cfg.run.health_hz),
         })
     }
 
@@ -340,6 +343,9 @@ impl NodeHost for PlannerHost {
         {
             return Err(HostError::LoadRefused);
         }
+        // A late-joining base controller (a restarted sim) gets the current goal from the
+        // topic's history, which iceoryx2 delivers only from the publisher's side.
+        self.nav_pub.update_connections()?;
         let go_on = self.handle(step.unwrap_or(Step::Wait), t)?;
         if let Some(job) = self.pending.take() {
             self.submitted_ns = self.clock.now_ns();
@@ -359,6 +365,17 @@ impl NodeHost for PlannerHost {
     /// Deadline events of the LBV thread, forwarded to their topic.
     fn health(&mut self) -> Result<(), HostError> {
         self.forward_events()
+    }
+
+    fn heartbeat(&self) -> Option<(&PortContext, Duration)> {
+        Some((&self.ctx, self.health_period))
+    }
+
+    fn inputs(&self, h: &mut NodeHealth) {
+        report_input(h, topics::MAP, &self.map_sub);
+        report_input(h, topics::STATE, &self.state_sub);
+        report_input(h, topics::NAV_GRID, &self.nav_sub);
+        report_input(h, topics::MAP_GRID, &self.explore_sub);
     }
 }
 

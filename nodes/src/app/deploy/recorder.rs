@@ -2,6 +2,7 @@
 //! recorder's view of a scene ([`recorder_setup`], also used by the lockstep host).
 
 use super::RunArgs;
+use super::health::report_input;
 use super::host::{self, Flow, HostError, NodeHost, Pace};
 use crate::app::topics;
 use crate::config::Config;
@@ -9,7 +10,7 @@ use crate::sim::Scene;
 use runtime::ports::{PortContext, Subscriber};
 use runtime::recorder::{MountGeometry, Recorder, RecorderHandle, RecorderSetup, TruthBox};
 use shm_types::{
-    DeadlineEvent, DepthFrame, Detections, NavGoal, NeckGoal, ObjectMap, OccupancyGrid,
+    DeadlineEvent, DepthFrame, Detections, NavGoal, NeckGoal, NodeHealth, ObjectMap, OccupancyGrid,
     PlannerDecision, RobotState,
 };
 use std::sync::atomic::AtomicBool;
@@ -71,7 +72,11 @@ struct RecorderHost {
     nav: Subscriber<NavGoal>,
     neck: Subscriber<NeckGoal>,
     deadline: Subscriber<DeadlineEvent>,
-    _ctx: PortContext,
+    health: Subscriber<NodeHealth>,
+    /// Simulated time of the newest robot state (heartbeats carry none).
+    sim_ns: u64,
+    ctx: PortContext,
+    health_period: Duration,
 }
 
 impl RecorderHost {
@@ -112,7 +117,10 @@ impl RecorderHost {
             nav: ctx.subscriber(topics::NAV_GOAL)?,
             neck: ctx.subscriber(topics::NECK_GOAL)?,
             deadline: ctx.subscriber(topics::DEADLINE)?,
-            _ctx: ctx,
+            health: ctx.subscriber(topics::HEALTH)?,
+            sim_ns: 0,
+            ctx,
+            health_period: Duration::from_secs_f64(1.0 / cfg.run.health_hz),
         })
     }
 }
@@ -134,6 +142,7 @@ impl NodeHost for RecorderHost {
             any = true;
         }
         while let Some(s) = self.state.receive()? {
+            self.sim_ns = s.header.sim_time_ns;
             h.record_state(&s);
             any = true;
         }
@@ -161,7 +170,31 @@ impl NodeHost for RecorderHost {
             h.record_deadline(&s);
             any = true;
         }
+        while let Some(s) = self.health.receive()? {
+            // Stamped with the run's simulated time, so it sorts with the other topics.
+            let mut beat = *s;
+            beat.header.sim_time_ns = self.sim_ns;
+            h.record_health(&beat);
+            any = true;
+        }
         Ok(if any { Flow::Busy } else { Flow::Idle })
+    }
+
+    fn heartbeat(&self) -> Option<(&PortContext, Duration)> {
+        Some((&self.ctx, self.health_period))
+    }
+
+    fn inputs(&self, h: &mut NodeHealth) {
+        report_input(h, topics::DEPTH, &self.depth);
+        report_input(h, topics::DETECTIONS, &self.detections);
+        report_input(h, topics::NAV_GRID, &self.grid);
+        report_input(h, topics::STATE, &self.state);
+        report_input(h, topics::TRUTH, &self.truth);
+        report_input(h, topics::MAP, &self.map);
+        report_input(h, topics::DECISION, &self.decision);
+        report_input(h, topics::NAV_GOAL, &self.nav);
+        report_input(h, topics::NECK_GOAL, &self.neck);
+        report_input(h, topics::DEADLINE, &self.deadline);
     }
 
     fn finish(self) -> Result<(), HostError> {

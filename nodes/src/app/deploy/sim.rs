@@ -1,6 +1,7 @@
 //! `vpsom node sim`: the simulator on a periodic executor thread.
 
 use super::RunArgs;
+use super::health::report_input;
 use super::host::{self, Flow, HostError, NodeHost, Pace, Periodic};
 use crate::app::topics;
 use crate::config::Config;
@@ -9,9 +10,11 @@ use runtime::clock::MonotonicClock;
 use runtime::executor::{ExecutorConfig, SchedPolicy};
 use runtime::ports::{PortContext, Publisher, Subscriber};
 use shm_types::{
-    DepthFrame, Detections, FrameVisibility, NavGoal, NeckGoal, OccupancyGrid, RobotState,
+    DepthFrame, Detections, FrameVisibility, NavGoal, NeckGoal, NodeHealth, OccupancyGrid,
+    RobotState,
 };
 use std::sync::atomic::AtomicBool;
+use std::time::Duration;
 
 /// `vpsom node sim`: steps the simulator at `rates.state_hz` (simulated), renders frames at
 /// `rates.camera_hz` straight into loaned depth/detection samples, publishes robot state,
@@ -46,7 +49,8 @@ struct SimHost {
     grid_pub: Publisher<OccupancyGrid>,
     nav_sub: Subscriber<NavGoal>,
     neck_sub: Subscriber<NeckGoal>,
-    _ctx: PortContext,
+    ctx: PortContext,
+    health_period: Duration,
     /// Simulated step, ns.
     dt_ns: u64,
     /// Camera period (simulated), ns.
@@ -73,7 +77,8 @@ impl SimHost {
             grid_pub: ctx.publisher(topics::NAV_GRID)?,
             nav_sub: ctx.subscriber(topics::NAV_GOAL)?,
             neck_sub: ctx.subscriber(topics::NECK_GOAL)?,
-            _ctx: ctx,
+            ctx,
+            health_period: Duration::from_secs_f64(1.0 / cfg.run.health_hz),
             dt_ns: (1e9 / cfg.rates.state_hz).round() as u64,
             cam_ns: (1e9 / cfg.rates.camera_hz).round() as u64,
             next_cam: 0,
@@ -131,5 +136,14 @@ impl NodeHost for SimHost {
         }
         sim.step(self.dt_ns);
         Ok(Flow::Busy)
+    }
+
+    fn heartbeat(&self) -> Option<(&PortContext, Duration)> {
+        Some((&self.ctx, self.health_period))
+    }
+
+    fn inputs(&self, h: &mut NodeHealth) {
+        report_input(h, topics::NAV_GOAL, &self.nav_sub);
+        report_input(h, topics::NECK_GOAL, &self.neck_sub);
     }
 }
