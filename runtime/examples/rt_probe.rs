@@ -11,7 +11,7 @@
 
 use runtime::executor::{Control, Cycle, Executor, ExecutorConfig};
 use runtime::ports::{PortContext, PortsConfig, Stamp};
-use shm_types::{DepthFrame, Intrinsics};
+use shm_types::{DepthFrame, Intrinsics, Pose3};
 use std::time::{Duration, Instant};
 
 mod common;
@@ -45,7 +45,7 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
         let mut f = publ.loan()?; // includes zero-filling 600 KB in place
         f.width = 640;
         f.height = 480;
-        // The subscriber validates on receipt: a frame without intrinsics is dropped.
+        // The subscriber validates on receipt: a frame without intrinsics or pose is dropped.
         f.intrinsics = Intrinsics {
             fx: 525.0,
             fy: 525.0,
@@ -54,6 +54,7 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
             min_range: 0.5,
             max_range: 4.5,
         };
+        f.camera_pose = Pose3::IDENTITY;
         f.send(Stamp {
             source_ns: k,
             sim_ns: k,
