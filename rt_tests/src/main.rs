@@ -106,6 +106,10 @@ enum Cmd {
         cpu: usize,
         #[arg(long)]
         memory_mb: usize,
+        /// The harness's pid: the worker exits as soon as it is no longer its parent.
+        /// Without it (load started by hand) it runs until killed.
+        #[arg(long)]
+        parent: Option<u32>,
     },
     #[command(hide = true)]
     FakePipeline {
@@ -343,8 +347,12 @@ fn real_main() -> Result<std::process::ExitCode> {
         }
         #[cfg(not(feature = "link"))]
         Cmd::LinkPeer(_) => bail_no_link()?,
-        Cmd::StressWorker { cpu, memory_mb } => {
-            stress::worker(*cpu, *memory_mb)?;
+        Cmd::StressWorker {
+            cpu,
+            memory_mb,
+            parent,
+        } => {
+            stress::worker(*cpu, *memory_mb, *parent)?;
             return Ok(std::process::ExitCode::SUCCESS);
         }
         Cmd::FakePipeline { ns } => {

@@ -5,7 +5,7 @@
 //! thread that keeps writing one byte per page of a `memory_mb` buffer. Children run at the
 //! default policy (`SCHED_OTHER`, nice 0). They are killed when the [`Load`] is dropped (normal
 //! end, error, Ctrl-C via [`crate::interrupted`]); a worker also exits on its own when its parent
-//! dies (it watches its parent pid), so a `kill -9` of the harness does not leave load behind.
+//! dies (it is given its parent's pid and watches it), so a `kill -9` of the harness does not leave load behind.
 
 use crate::settings::StressSettings;
 use anyhow::{Context, Result};
@@ -58,6 +58,8 @@ impl Load {
                 &workers.to_string(),
                 "--memory-mb",
                 &s.memory_mb.to_string(),
+                "--parent",
+                &std::process::id().to_string(),
             ]);
             load.spawn(cmd)?;
             load.description = format!(
@@ -97,8 +99,15 @@ pub fn which(prog: &str) -> bool {
 }
 
 /// The hidden `stress-worker` subcommand: run until the parent dies or we are killed.
-pub fn worker(cpu: usize, memory_mb: usize) -> Result<()> {
-    let parent = std::os::unix::process::parent_id();
+///
+/// `parent` is the harness's pid, passed on the command line rather than read at start-up: a
+/// harness killed before the worker first asked would otherwise leave it re-parented to init
+/// (or a subreaper) and watching that forever. Without `parent` it runs until killed.
+pub fn worker(cpu: usize, memory_mb: usize, parent: Option<u32>) -> Result<()> {
+    let orphaned = || parent.is_some_and(|p| std::os::unix::process::parent_id() != p);
+    if orphaned() {
+        return Ok(());
+    }
     for k in 0..cpu {
         std::thread::Builder::new()
             .name(format!("stress-cpu-{k}"))
@@ -132,7 +141,7 @@ pub fn worker(cpu: usize, memory_mb: usize) -> Result<()> {
     }
     loop {
         std::thread::sleep(Duration::from_millis(100));
-        if std::os::unix::process::parent_id() != parent {
+        if orphaned() {
             return Ok(());
         }
     }
