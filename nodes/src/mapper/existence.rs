@@ -28,8 +28,8 @@
 //!
 //! A detector's misses are not independent between nearby views (10 Hz frames of one scene, a
 //! persistent per-direction failure), so evidence is taken once per viewpoint: an object's `l`
-//! changes only when the camera moved `min_view_change` (and `min_view_change_per_m` × its
-//! distance to the object: from afar a short step is the same view) or turned
+//! changes only when the camera moved `min_view_change` (and, once the object is confirmed,
+//! `min_view_change_per_m` × its distance to it: from afar a short step is the same view) or turned
 //! `min_view_angle_deg` around the object since its last change. `l` is clamped to `±max_log_odds`; an object below
 //! `delete_below` is deleted.
 
@@ -66,19 +66,13 @@ fn explains_miss(det: [f32; 4], proj: [f32; 4], min_iou: f32, min_overlap: f32) 
 }
 
 /// Whether the camera at `cam` is a new viewpoint on an object at `centre` since the one at
-/// `last`: it moved at least `min_view_change` and `min_view_change_per_m` × its distance to
-/// the object, or the direction from the object to the camera turned by `min_view_angle_deg`
-/// (`cos_min` is that angle's cosine). Views from afar that differ by a short step see the
-/// object at the same angle and size, where a detector fails the same way again.
-fn new_viewpoint(
-    last: Vec3,
-    cam: Vec3,
-    centre: Vec3,
-    e: &super::config::ExistenceConfig,
-    cos_min: f32,
-) -> bool {
+/// `last`: it moved at least `step` (`min_view_change`, and for a confirmed object
+/// `min_view_change_per_m` × its distance to the object), or the direction from the object to
+/// the camera turned by `min_view_angle_deg` (`cos_min` is that angle's cosine). Views from
+/// afar that differ by a short step see the object at the same angle and size, where a
+/// detector fails the same way again.
+fn new_viewpoint(last: Vec3, cam: Vec3, centre: Vec3, step: f32, cos_min: f32) -> bool {
     let (a, b) = (last - centre, cam - centre);
-    let step = e.min_view_change.max(e.min_view_change_per_m * b.length());
     last.distance(cam) >= step || a.normalize_or_zero().dot(b.normalize_or_zero()) <= cos_min
 }
 
@@ -205,8 +199,16 @@ impl Mapper {
             };
             let o = &mut self.objects[k];
             let was_hit = std::mem::take(&mut o.hit);
+            // Confirmed objects only: an unconfirmed one (a false positive, a duplicate) keeps
+            // taking evidence at every `min_view_change`.
+            let per_m = if o.hit_views >= e.confirmed_hits {
+                e.min_view_change_per_m
+            } else {
+                0.0
+            };
             let new_view = o.last_view.is_none_or(|p| {
-                new_viewpoint(p, cam_pos, o.cuboid.center, &e, cos_min)
+                let step = e.min_view_change.max(per_m * cam_pos.distance(o.cuboid.center));
+                new_viewpoint(p, cam_pos, o.cuboid.center, step, cos_min)
             });
             if delta != 0.0 && new_view {
                 o.last_view = Some(cam_pos);
@@ -335,21 +337,20 @@ mod tests {
 
     #[test]
     fn a_short_step_far_from_an_object_is_the_same_viewpoint() {
-        let mut e = crate::mapper::ExistenceConfig::default();
-        e.min_view_change = 0.2;
-        e.min_view_change_per_m = 0.18;
         let cos_min = 10f32.to_radians().cos();
         let o = Vec3::new(0.0, 0.0, 0.8);
         let (near, far) = (Vec3::new(1.0, 0.0, 1.2), Vec3::new(3.0, 0.0, 1.2));
         let side = Vec3::new(0.0, 0.25, 0.0);
+        // The step update_existence uses for a confirmed object: 0.2 m, 0.18 per metre.
+        let step = |cam: Vec3| 0.2f32.max(0.18 * cam.distance(o));
         // 0.25 m sideways: a new view at 1 m (14 deg), the same view at 3 m (5 deg).
-        assert!(new_viewpoint(near, near + side, o, &e, cos_min));
-        assert!(!new_viewpoint(far, far + side, o, &e, cos_min));
-        // Far away, a 0.6 m step (11 deg) is a new view; so is any turn of >= 10 deg.
-        assert!(new_viewpoint(far, far + side * 2.4, o, &e, cos_min));
-        // 0 per metre: the absolute step alone, as before.
-        e.min_view_change_per_m = 0.0;
-        assert!(new_viewpoint(far, far + side, o, &e, cos_min));
+        assert!(new_viewpoint(near, near + side, o, step(near + side), cos_min));
+        assert!(!new_viewpoint(far, far + side, o, step(far + side), cos_min));
+        // Far away, a 0.6 m step (11 deg) is a new view.
+        let far2 = far + side * 2.4;
+        assert!(new_viewpoint(far, far2, o, step(far2), cos_min));
+        // The absolute step alone (an unconfirmed object): 0.25 m is a new view at 3 m too.
+        assert!(new_viewpoint(far, far + side, o, 0.2, cos_min));
     }
 
     #[test]
