@@ -62,7 +62,8 @@ fn box_overlap_min(a: [f32; 4], b: [f32; 4]) -> f32 {
 /// object's projected box `proj` at least `min_iou`, or (with `min_overlap > 0`) the
 /// intersection at least `min_overlap` of the smaller box.
 fn explains_miss(det: [f32; 4], proj: [f32; 4], min_iou: f32, min_overlap: f32) -> bool {
-    box_iou(det, proj) >= min_iou || (min_overlap > 0.0 && box_overlap_min(det, proj) >= min_overlap)
+    box_iou(det, proj) >= min_iou
+        || (min_overlap > 0.0 && box_overlap_min(det, proj) >= min_overlap)
 }
 
 /// Whether the camera at `cam` is a new viewpoint on an object at `centre` since the one at
@@ -207,7 +208,9 @@ impl Mapper {
                 0.0
             };
             let new_view = o.last_view.is_none_or(|p| {
-                let step = e.min_view_change.max(per_m * cam_pos.distance(o.cuboid.center));
+                let step = e
+                    .min_view_change
+                    .max(per_m * cam_pos.distance(o.cuboid.center));
                 new_viewpoint(p, cam_pos, o.cuboid.center, step, cos_min)
             });
             if delta != 0.0 && new_view {
@@ -326,13 +329,19 @@ mod tests {
         // A bottle 10 px wide; its detection shifted by 5 px and a little taller: IoU 0.29.
         let (proj, det) = ([160.0, 40.0, 170.0, 90.0], [165.0, 35.0, 175.0, 95.0]);
         assert!(box_iou(det, proj) < 0.3);
-        assert!(!explains_miss(det, proj, 0.3, 0.0), "IoU alone: counted as a miss");
+        assert!(
+            !explains_miss(det, proj, 0.3, 0.0),
+            "IoU alone: counted as a miss"
+        );
         assert!(explains_miss(det, proj, 0.3, 0.4));
         // A neighbour's box beside it does not.
         let beside = [172.0, 40.0, 182.0, 90.0];
         assert!(!explains_miss(beside, proj, 0.3, 0.4));
         assert!((box_overlap_min([0.0, 0.0, 2.0, 2.0], [1.0, 0.0, 5.0, 4.0]) - 0.5).abs() < 1e-6);
-        assert_eq!(box_overlap_min([0.0, 0.0, 0.0, 2.0], [0.0, 0.0, 2.0, 2.0]), 0.0);
+        assert_eq!(
+            box_overlap_min([0.0, 0.0, 0.0, 2.0], [0.0, 0.0, 2.0, 2.0]),
+            0.0
+        );
     }
 
     #[test]
@@ -344,8 +353,20 @@ mod tests {
         // The step update_existence uses for a confirmed object: 0.2 m, 0.18 per metre.
         let step = |cam: Vec3| 0.2f32.max(0.18 * cam.distance(o));
         // 0.25 m sideways: a new view at 1 m (14 deg), the same view at 3 m (5 deg).
-        assert!(new_viewpoint(near, near + side, o, step(near + side), cos_min));
-        assert!(!new_viewpoint(far, far + side, o, step(far + side), cos_min));
+        assert!(new_viewpoint(
+            near,
+            near + side,
+            o,
+            step(near + side),
+            cos_min
+        ));
+        assert!(!new_viewpoint(
+            far,
+            far + side,
+            o,
+            step(far + side),
+            cos_min
+        ));
         // Far away, a 0.6 m step (11 deg) is a new view.
         let far2 = far + side * 2.4;
         assert!(new_viewpoint(far, far2, o, step(far2), cos_min));
