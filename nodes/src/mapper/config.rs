@@ -264,11 +264,20 @@ pub struct ExistenceConfig {
     /// Evidence is taken once per viewpoint: an object's existence changes only when the camera
     /// moved at least this far (m) since its last change ...
     pub min_view_change: f32,
+    /// ... and at least this much per metre of its distance to the object (a step of 0.2 m at
+    /// 3 m turns the view by 4°: the detector's failure there is the same as before; 0: the
+    /// absolute `min_view_change` alone) ...
+    pub min_view_change_per_m: f32,
     /// ... or the direction from the object to the camera turned by at least this (degrees).
     pub min_view_angle_deg: f32,
     /// A missed object overlapped (box IoU) this much by a detection of a compatible class that
     /// was not associated with it is not counted as missed.
     pub overlap_iou: f32,
+    /// ... nor one whose box overlaps it by this fraction of the smaller of the two boxes
+    /// (intersection over the smaller area): the IoU of a thin object's box (a bottle 10 px
+    /// wide at 320 × 240) with the projection of its slightly smeared cuboid falls below
+    /// `overlap_iou` with a few pixels of box jitter (0 turns this rule off).
+    pub overlap_min: f32,
     /// Detectability (`[mapper.extensions] detectability`): visible projected box areas
     /// (pixels at 640 × 480, ascending) at which the detector's recall is `recall`; linear in
     /// log area between them, clamped outside.
@@ -637,6 +646,18 @@ impl MapperConfig {
         c.in_range(
             "mapper.existence.overlap_iou",
             e.overlap_iou.into(),
+            0.0,
+            1.0,
+        )?;
+        c.in_range(
+            "mapper.existence.min_view_change_per_m",
+            e.min_view_change_per_m.into(),
+            0.0,
+            1.0,
+        )?;
+        c.in_range(
+            "mapper.existence.overlap_min",
+            e.overlap_min.into(),
             0.0,
             1.0,
         )?;

@@ -12,7 +12,8 @@
 //!   are not behind the frame's depth by more than `occlusion_tolerance` (a cuboid face lies at
 //!   or in front of the object's surface, so the frame seeing the object or what is behind it
 //!   counts as visible). It is not counted missed when a detection of a compatible class that
-//!   went elsewhere (or was refused) overlaps its projected box (IoU ≥ `overlap_iou`): nearby
+//!   went elsewhere (or was refused) overlaps its projected box (IoU ≥ `overlap_iou`, or the
+//!   intersection ≥ `overlap_min` of the smaller box: a thin object's jittered box): nearby
 //!   objects merged into one box, a jittered box failing the test. With `[mapper.extensions]
 //!   cross_class`, a detection of any foreground class overlapping it by `cross_class_iou` also
 //!   explains the miss (a label confusion outside the look-alike groups).
@@ -27,8 +28,9 @@
 //!
 //! A detector's misses are not independent between nearby views (10 Hz frames of one scene, a
 //! persistent per-direction failure), so evidence is taken once per viewpoint: an object's `l`
-//! changes only when the camera moved `min_view_change` or turned `min_view_angle_deg` around the
-//! object since its last change. `l` is clamped to `±max_log_odds`; an object below
+//! changes only when the camera moved `min_view_change` (and, once the object is confirmed,
+//! `min_view_change_per_m` × its distance to it: from afar a short step is the same view) or turned
+//! `min_view_angle_deg` around the object since its last change. `l` is clamped to `±max_log_odds`; an object below
 //! `delete_below` is deleted.
 
 use super::Mapper;
@@ -45,6 +47,34 @@ fn box_iou(a: [f32; 4], b: [f32; 4]) -> f32 {
     let area = |r: [f32; 4]| (r[2] - r[0]).max(0.0) * (r[3] - r[1]).max(0.0);
     let union = area(a) + area(b) - inter;
     if union > 0.0 { inter / union } else { 0.0 }
+}
+
+/// Intersection of two pixel boxes over the smaller one's area (0 when either is empty).
+fn box_overlap_min(a: [f32; 4], b: [f32; 4]) -> f32 {
+    let iw = (a[2].min(b[2]) - a[0].max(b[0])).max(0.0);
+    let ih = (a[3].min(b[3]) - a[1].max(b[1])).max(0.0);
+    let area = |r: [f32; 4]| (r[2] - r[0]).max(0.0) * (r[3] - r[1]).max(0.0);
+    let small = area(a).min(area(b));
+    if small > 0.0 { iw * ih / small } else { 0.0 }
+}
+
+/// Whether a compatible detection's box `det` explains an object's miss: box IoU with the
+/// object's projected box `proj` at least `min_iou`, or (with `min_overlap > 0`) the
+/// intersection at least `min_overlap` of the smaller box.
+fn explains_miss(det: [f32; 4], proj: [f32; 4], min_iou: f32, min_overlap: f32) -> bool {
+    box_iou(det, proj) >= min_iou
+        || (min_overlap > 0.0 && box_overlap_min(det, proj) >= min_overlap)
+}
+
+/// Whether the camera at `cam` is a new viewpoint on an object at `centre` since the one at
+/// `last`: it moved at least `step` (`min_view_change`, and for a confirmed object
+/// `min_view_change_per_m` × its distance to the object), or the direction from the object to
+/// the camera turned by `min_view_angle_deg` (`cos_min` is that angle's cosine). Views from
+/// afar that differ by a short step see the object at the same angle and size, where a
+/// detector fails the same way again.
+fn new_viewpoint(last: Vec3, cam: Vec3, centre: Vec3, step: f32, cos_min: f32) -> bool {
+    let (a, b) = (last - centre, cam - centre);
+    last.distance(cam) >= step || a.normalize_or_zero().dot(b.normalize_or_zero()) <= cos_min
 }
 
 /// How much of an object a frame should have shown.
@@ -170,10 +200,18 @@ impl Mapper {
             };
             let o = &mut self.objects[k];
             let was_hit = std::mem::take(&mut o.hit);
+            // Confirmed objects only: an unconfirmed one (a false positive, a duplicate) keeps
+            // taking evidence at every `min_view_change`.
+            let per_m = if o.hit_views >= e.confirmed_hits {
+                e.min_view_change_per_m
+            } else {
+                0.0
+            };
             let new_view = o.last_view.is_none_or(|p| {
-                let (a, b) = (p - o.cuboid.center, cam_pos - o.cuboid.center);
-                p.distance(cam_pos) >= e.min_view_change
-                    || a.normalize_or_zero().dot(b.normalize_or_zero()) <= cos_min
+                let step = e
+                    .min_view_change
+                    .max(per_m * cam_pos.distance(o.cuboid.center));
+                new_viewpoint(p, cam_pos, o.cuboid.center, step, cos_min)
             });
             if delta != 0.0 && new_view {
                 o.last_view = Some(cam_pos);
@@ -252,8 +290,10 @@ impl Mapper {
         }
         let cross = self.cfg.extensions.cross_class;
         if dets.iter().any(|d| {
-            let iou = box_iou(d.bbox.map(f32::from), clipped);
-            (self.groups.compatible(d.class_id, class_id) && iou >= e.overlap_iou)
+            let bbox = d.bbox.map(f32::from);
+            let iou = box_iou(bbox, clipped);
+            (self.groups.compatible(d.class_id, class_id)
+                && explains_miss(bbox, clipped, e.overlap_iou, e.overlap_min))
                 || (cross && !is_background_class(d.class_id) && iou >= e.cross_class_iou)
         }) {
             return None;
@@ -282,6 +322,56 @@ mod tests {
     fn box_iou_of_overlapping_boxes() {
         assert!((box_iou([0.0, 0.0, 2.0, 2.0], [1.0, 0.0, 3.0, 2.0]) - 1.0 / 3.0).abs() < 1e-6);
         assert_eq!(box_iou([0.0, 0.0, 1.0, 1.0], [2.0, 2.0, 3.0, 3.0]), 0.0);
+    }
+
+    #[test]
+    fn a_jittered_box_of_a_thin_object_explains_its_miss() {
+        // A bottle 10 px wide; its detection shifted by 5 px and a little taller: IoU 0.29.
+        let (proj, det) = ([160.0, 40.0, 170.0, 90.0], [165.0, 35.0, 175.0, 95.0]);
+        assert!(box_iou(det, proj) < 0.3);
+        assert!(
+            !explains_miss(det, proj, 0.3, 0.0),
+            "IoU alone: counted as a miss"
+        );
+        assert!(explains_miss(det, proj, 0.3, 0.4));
+        // A neighbour's box beside it does not.
+        let beside = [172.0, 40.0, 182.0, 90.0];
+        assert!(!explains_miss(beside, proj, 0.3, 0.4));
+        assert!((box_overlap_min([0.0, 0.0, 2.0, 2.0], [1.0, 0.0, 5.0, 4.0]) - 0.5).abs() < 1e-6);
+        assert_eq!(
+            box_overlap_min([0.0, 0.0, 0.0, 2.0], [0.0, 0.0, 2.0, 2.0]),
+            0.0
+        );
+    }
+
+    #[test]
+    fn a_short_step_far_from_an_object_is_the_same_viewpoint() {
+        let cos_min = 10f32.to_radians().cos();
+        let o = Vec3::new(0.0, 0.0, 0.8);
+        let (near, far) = (Vec3::new(1.0, 0.0, 1.2), Vec3::new(3.0, 0.0, 1.2));
+        let side = Vec3::new(0.0, 0.25, 0.0);
+        // The step update_existence uses for a confirmed object: 0.2 m, 0.18 per metre.
+        let step = |cam: Vec3| 0.2f32.max(0.18 * cam.distance(o));
+        // 0.25 m sideways: a new view at 1 m (14 deg), the same view at 3 m (5 deg).
+        assert!(new_viewpoint(
+            near,
+            near + side,
+            o,
+            step(near + side),
+            cos_min
+        ));
+        assert!(!new_viewpoint(
+            far,
+            far + side,
+            o,
+            step(far + side),
+            cos_min
+        ));
+        // Far away, a 0.6 m step (11 deg) is a new view.
+        let far2 = far + side * 2.4;
+        assert!(new_viewpoint(far, far2, o, step(far2), cos_min));
+        // The absolute step alone (an unconfirmed object): 0.25 m is a new view at 3 m too.
+        assert!(new_viewpoint(far, far + side, o, 0.2, cos_min));
     }
 
     #[test]
