@@ -478,12 +478,24 @@ mod pcg {
             *l = s;
         }
         let inc_n = SUM_N.wrapping_mul(inc);
-        for (lo, hi) in lo.chunks_mut(LANES).zip(hi.chunks_mut(LANES)) {
-            for ((lo, hi), l) in lo.iter_mut().zip(hi).zip(&mut lanes) {
-                let r = output(*l);
-                (*lo, *hi) = (r as u32, (r >> 32) as u32);
-                *l = l.wrapping_mul(MUL_N).wrapping_add(inc_n);
-            }
+        let jump = |s: u128| s.wrapping_mul(MUL_N).wrapping_add(inc_n);
+        let split = |r: u64| (r as u32, (r >> 32) as u32);
+        let mut lo_blocks = lo.chunks_exact_mut(LANES);
+        let mut hi_blocks = hi.chunks_exact_mut(LANES);
+        // Whole blocks with the lanes in registers.
+        let [mut a, mut b, mut c, mut d] = lanes;
+        for (lo, hi) in (&mut lo_blocks).zip(&mut hi_blocks) {
+            let [ra, rb, rc, rd] = [a, b, c, d].map(output);
+            (lo[0], hi[0]) = split(ra);
+            (lo[1], hi[1]) = split(rb);
+            (lo[2], hi[2]) = split(rc);
+            (lo[3], hi[3]) = split(rd);
+            [a, b, c, d] = [jump(a), jump(b), jump(c), jump(d)];
+        }
+        let tail = [a, b, c, d];
+        let (lo, hi) = (lo_blocks.into_remainder(), hi_blocks.into_remainder());
+        for ((lo, hi), s) in lo.iter_mut().zip(hi).zip(tail) {
+            (*lo, *hi) = split(output(s));
         }
     }
 }
