@@ -2,15 +2,17 @@
 
 use super::config::SimConfig;
 use super::detector::POLY_CAP;
-use super::rowcast::{self, RowHits, RowRays};
+use super::rowcast::{self, RowHits, RowRays, load4, store4};
 use super::scene::SolidShape;
 use super::world::{STRUCTURE, World};
 use crate::config::CameraConfig;
 use crate::geom::{Camera, convex_hull_into};
 use glam::{Affine3A, Mat3, Vec2, Vec3};
-use rand::{Rng, RngCore};
+use rand::Rng;
 use rand_pcg::Pcg64;
 use rayon::prelude::*;
+use wide::bytemuck::cast;
+use wide::{f32x4, i32x4, u32x4};
 
 /// Scratch images of one render, reused frame to frame (no allocation in steady state).
 #[derive(Debug, Clone)]
@@ -199,7 +201,7 @@ impl DepthCamera {
                     inst: inst_row,
                     cos: cos_row,
                 };
-                rowcast::room(hits, &rays, y, room_lo, room_hi, STRUCTURE);
+                rowcast::room(hits, &rays, room_lo, room_hi, STRUCTURE);
                 // Objects whose projected hull covers this row.
                 for (obj, s) in spans.iter().enumerate() {
                     if (v as u32) < s.rows[0] || (v as u32) >= s.rows[1] {
@@ -222,13 +224,14 @@ impl DepthCamera {
                     let id = world.instance(obj);
                     match world.object_shape(obj) {
                         SolidShape::Cuboid(c) => {
-                            rowcast::cuboid(hits, &rays, y, c.half_extents, far, id)
+                            rowcast::cuboid(hits, &rays, c.half_extents, far, id)
                         }
                         SolidShape::Cylinder(c) => {
-                            rowcast::cylinder(hits, &rays, y, c.radius, c.half_height, far, id)
+                            rowcast::cylinder(hits, &rays, c.radius, c.half_height, far, id)
                         }
                     }
                 }
+                rowcast::normalise_cos(xs, cos_row, y);
                 self.measure_row(frame_index, v as u64, true_row, cos_row, depth_row);
             });
     }
@@ -240,24 +243,61 @@ impl DepthCamera {
     #[inline(never)]
     fn measure_row(&self, frame: u64, row: u64, z: &[f32], cos: &[f32], depth_row: &mut [u16]) {
         let mut rng = row_rng(self.seed, frame, row);
-        let mut bits = [[0u32; 2]; shm_types::MAX_WIDTH];
-        let bits = &mut bits[..z.len()];
+        let n = z.len();
+        let mut lo = [0u32; shm_types::MAX_WIDTH];
+        let mut hi = [0u32; shm_types::MAX_WIDTH];
         if self.noise_a > 0.0 || self.noise_b > 0.0 {
-            bits.iter_mut().for_each(|b| {
-                let r = rng.next_u64();
-                *b = [r as u32, (r >> 32) as u32];
-            });
+            // `rng`'s next `n` outputs, in independent lanes; then skip them in `rng`.
+            pcg::fill(
+                row_state(self.seed, frame, row),
+                ROW_STREAM,
+                &mut lo[..n],
+                &mut hi[..n],
+            );
+            rng.advance(n as u128);
         }
-        // A copy on the stack: the loop keeps the parameters in registers and vectorises.
-        let me = self.clone();
-        for (((d, &z), &c), &r) in depth_row.iter_mut().zip(z).zip(cos).zip(bits.iter()) {
-            *d = me.reading(z, c, r);
+        // Four pixels at a time in SIMD lanes.
+        let (lo, hi) = (&lo[..n], &hi[..n]);
+        for i in (0..n).step_by(4) {
+            let (f, u) = (|v| f32x4::new(load4(v, i)), |v| u32x4::new(load4(v, i)));
+            let mm = self.readings(f(z), f(cos), u(lo), u(hi)).to_array();
+            store4(depth_row, i, mm.map(|r| r as u16));
         }
         let mut u = self.dropout_gap(&mut rng);
         while u < depth_row.len() {
             depth_row[u] = 0;
             u = u.saturating_add(1 + self.dropout_gap(&mut rng));
         }
+    }
+
+    /// [`reading`](Self::reading) of four pixels (SIMD lanes; the same numbers): true depths,
+    /// incidence cosines, low and high words of the noise bits.
+    #[inline(always)]
+    fn readings(&self, z: f32x4, cos: f32x4, lo: u32x4, hi: u32x4) -> u32x4 {
+        let k = &self.camera.k;
+        let s = f32x4::splat;
+        let valid = z.simd_gt(s(0.0))
+            & z.simd_ge(s(k.min_range))
+            & z.simd_le(s(k.max_range))
+            & cos.simd_ge(s(self.cos_grazing));
+        let sigma = s(self.noise_a) + s(self.noise_b) * z * z;
+        // `std_normal`, lanewise.
+        let ones = popcount4(lo >> 16) + popcount4(hi);
+        let ones = cast::<u32x4, i32x4>(ones).round_float();
+        let dither = cast::<u32x4, i32x4>(lo & u32x4::splat(0xffff)).round_float()
+            * s(1.0 / 65_536.0)
+            - s(0.5);
+        let normal = (ones - s(24.0) + dither) * s(NORMAL_SCALE);
+        let z = z + sigma * normal;
+        // `max` then `min` as compare-selects: NaN gives 1 (and is never valid).
+        let v = z * s(1000.0) + s(0.5);
+        let v = v.simd_gt(s(1.0)).bitselect(v, s(1.0));
+        let v = v.simd_lt(s(65_535.0)).bitselect(v, s(65_535.0));
+        // `floor_u16`, lanewise.
+        let r = (v + s(FLOOR_MAGIC)) - s(FLOOR_MAGIC);
+        let f = r.simd_gt(v).bitselect(r - s(1.0), r);
+        let mm = cast::<f32x4, u32x4>(f + s(FLOOR_MAGIC)) - u32x4::splat(FLOOR_MAGIC.to_bits());
+        mm & cast::<f32x4, u32x4>(valid)
     }
 
     /// Pixels before the next dropout: geometric with success probability `dropout`.
@@ -319,8 +359,9 @@ impl DepthCamera {
 
     /// Depth reading (mm, 0 = invalid) of a surface at true depth `z` (0 = nothing hit) whose
     /// normal makes an angle with cosine `cos_incidence` with the ray, with the noise drawn from
-    /// 64 random `bits` (dropouts aside). Branch-free.
-    #[inline(always)]
+    /// 64 random `bits` (dropouts aside). The scalar reference of [`readings`](Self::readings)
+    /// (a test checks that they agree).
+    #[cfg(test)]
     fn reading(&self, z: f32, cos_incidence: f32, bits: [u32; 2]) -> u16 {
         let k = &self.camera.k;
         let valid = (z > 0.0)
@@ -339,16 +380,28 @@ impl DepthCamera {
 /// ones among 48 bits (binomial, mean 24, variance 12) plus a uniform in [−½, ½) from the other
 /// 16 bits, scaled to unit variance (32-bit lanes, so that it vectorises). Its distribution is the binomial's, smoothed: within 0.2 % of the Gaussian CDF
 /// everywhere (checked by a test), zero mean, unit variance, tails cut at ±6.9σ.
-#[inline]
+#[cfg(test)]
 fn std_normal([lo, hi]: [u32; 2]) -> f32 {
-    const SCALE: f32 = 0.287_678; // 1 / √(12 + 1/12)
     let ones = (popcount(lo >> 16) + popcount(hi)) as i32 as f32;
     let dither = (lo & 0xffff) as i32 as f32 * (1.0 / 65_536.0) - 0.5;
-    (ones - 24.0 + dither) * SCALE
+    (ones - 24.0 + dither) * NORMAL_SCALE
+}
+
+/// `1 / √(12 + 1/12)`: unit variance for [`std_normal`].
+const NORMAL_SCALE: f32 = 0.287_678;
+
+/// [`popcount`] lanewise.
+#[inline(always)]
+fn popcount4(x: u32x4) -> u32x4 {
+    let c = u32x4::splat;
+    let x = x - ((x >> 1) & c(0x5555_5555));
+    let x = (x & c(0x3333_3333)) + ((x >> 2) & c(0x3333_3333));
+    let x = (x + (x >> 4)) & c(0x0f0f_0f0f);
+    (x + (x >> 8) + (x >> 16) + (x >> 24)) & c(0x3f)
 }
 
 /// Ones in `x` (SWAR: vectorises without a popcount instruction).
-#[inline(always)]
+#[cfg(test)]
 fn popcount(x: u32) -> u32 {
     let x = x - ((x >> 1) & 0x5555_5555);
     let x = (x & 0x3333_3333) + ((x >> 2) & 0x3333_3333);
@@ -356,13 +409,95 @@ fn popcount(x: u32) -> u32 {
     (x + (x >> 8) + (x >> 16) + (x >> 24)) & 0x3f
 }
 
+/// `v as u16` (truncation) for `v` in `[0, 65_535]`, without the saturation and NaN cases of
+/// `as`, which keep a loop from vectorising: round to an integer by adding and subtracting
+/// 2²³, step down if that rounded up, read the integer from the float's mantissa bits.
+#[cfg(test)]
+fn floor_u16(v: f32) -> u16 {
+    let r = (v + FLOOR_MAGIC) - FLOOR_MAGIC;
+    let f = if r > v { r - 1.0 } else { r };
+    ((f + FLOOR_MAGIC).to_bits() - FLOOR_MAGIC.to_bits()) as u16
+}
+
+/// 2²³: adding it to a float in `[0, 2²³)` leaves no fraction bits.
+const FLOOR_MAGIC: f32 = 8_388_608.0;
+
+/// The stream of the rows' PCGs.
+const ROW_STREAM: u128 = 0xa02b_dbf7_bb3c_0a7a_c28f_a16a_64ab_f96d;
+
+/// The initial state of the PCG of one row of one frame.
+fn row_state(seed: u64, frame: u64, row: u64) -> u128 {
+    let s = super::mix(seed, &[0x6465_7074, frame, row]);
+    s as u128 | ((row as u128) << 64)
+}
+
 /// A PCG stream for one row of one frame.
 fn row_rng(seed: u64, frame: u64, row: u64) -> Pcg64 {
-    let s = super::mix(seed, &[0x6465_7074, frame, row]);
-    Pcg64::new(
-        s as u128 | ((row as u128) << 64),
-        0xa02b_dbf7_bb3c_0a7a_c28f_a16a_64ab_f96d,
-    )
+    Pcg64::new(row_state(seed, frame, row), ROW_STREAM)
+}
+
+/// The outputs of a [`Pcg64`] (rand_pcg's `Lcg128Xsl64`: 128-bit LCG, XSL RR output) computed
+/// in [`pcg::LANES`] interleaved lanes: lane `j` steps through outputs `j, j + LANES, …` with the
+/// LCG's `LANES`-fold step, so the lanes' 128-bit multiplies do not wait on each other (one
+/// stream is a chain of dependent multiplies). Same numbers as `next_u64`, in the same order.
+mod pcg {
+    /// rand_pcg's multiplier.
+    const MUL: u128 = 0x2360_ED05_1FC6_5DA4_4385_DF64_9FCC_F645;
+    /// Interleaved lanes.
+    pub(super) const LANES: usize = 4;
+    /// `MUL^LANES` and `1 + MUL + … + MUL^(LANES − 1)`: `s ↦ MUL_N·s + SUM_N·inc` is `LANES`
+    /// steps of `s ↦ MUL·s + inc`.
+    const MUL_N: u128 = powers().0;
+    const SUM_N: u128 = powers().1;
+
+    const fn powers() -> (u128, u128) {
+        let (mut m, mut sum, mut i) = (1u128, 0u128, 0);
+        while i < LANES {
+            sum = sum.wrapping_add(m);
+            m = m.wrapping_mul(MUL);
+            i += 1;
+        }
+        (m, sum)
+    }
+
+    fn output(state: u128) -> u64 {
+        let rot = (state >> 122) as u32;
+        (((state >> 64) as u64) ^ (state as u64)).rotate_right(rot)
+    }
+
+    /// The first `lo.len()` outputs of `Pcg64::new(state, stream)`, split into their low and
+    /// high 32-bit words (`lo`, `hi`: as long).
+    pub(super) fn fill(state: u128, stream: u128, lo: &mut [u32], hi: &mut [u32]) {
+        let inc = (stream << 1) | 1;
+        let step = |s: u128| s.wrapping_mul(MUL).wrapping_add(inc);
+        // As `Pcg64::new`: add the increment, step; each output steps first.
+        let mut lanes = [step(state.wrapping_add(inc)); LANES];
+        let mut s = lanes[0];
+        for l in &mut lanes {
+            s = step(s);
+            *l = s;
+        }
+        let inc_n = SUM_N.wrapping_mul(inc);
+        let jump = |s: u128| s.wrapping_mul(MUL_N).wrapping_add(inc_n);
+        let split = |r: u64| (r as u32, (r >> 32) as u32);
+        let mut lo_blocks = lo.chunks_exact_mut(LANES);
+        let mut hi_blocks = hi.chunks_exact_mut(LANES);
+        // Whole blocks with the lanes in registers.
+        let [mut a, mut b, mut c, mut d] = lanes;
+        for (lo, hi) in (&mut lo_blocks).zip(&mut hi_blocks) {
+            let [ra, rb, rc, rd] = [a, b, c, d].map(output);
+            (lo[0], hi[0]) = split(ra);
+            (lo[1], hi[1]) = split(rb);
+            (lo[2], hi[2]) = split(rc);
+            (lo[3], hi[3]) = split(rd);
+            [a, b, c, d] = [jump(a), jump(b), jump(c), jump(d)];
+        }
+        let tail = [a, b, c, d];
+        let (lo, hi) = (lo_blocks.into_remainder(), hi_blocks.into_remainder());
+        for ((lo, hi), s) in lo.iter_mut().zip(hi).zip(tail) {
+            (*lo, *hi) = split(output(s));
+        }
+    }
 }
 
 #[cfg(test)]
@@ -370,6 +505,7 @@ mod tests {
     use super::*;
     use crate::geom::optical_rotation;
     use crate::sim::scene::Scene;
+    use rand::RngCore;
     use std::path::Path;
 
     fn world_with_box_at(x: f32) -> World {
@@ -452,6 +588,65 @@ mod tests {
         assert!(rms_far > 0.015 && rms_far < 0.035, "{rms_far}");
         assert_eq!(stats(1.25, 1).0, near, "same seed, same frame");
         assert_ne!(stats(1.25, 2).0, near, "different seed, different noise");
+    }
+
+    #[test]
+    fn lane_pcg_equals_rand_pcg() {
+        for (row, len) in [(0u64, 640usize), (7, 1), (123, 3), (479, 161)] {
+            let mut rng = row_rng(99, 5, row);
+            let (mut lo, mut hi) = (vec![0u32; len], vec![0u32; len]);
+            pcg::fill(row_state(99, 5, row), ROW_STREAM, &mut lo, &mut hi);
+            for (lo, hi) in lo.iter().zip(&hi) {
+                let r = rng.next_u64();
+                assert_eq!([*lo, *hi], [r as u32, (r >> 32) as u32]);
+            }
+            let mut skipped = row_rng(99, 5, row);
+            skipped.advance(len as u128);
+            assert_eq!(skipped.next_u64(), rng.next_u64());
+        }
+    }
+
+    #[test]
+    fn lanewise_readings_equal_the_scalar_reference() {
+        let cam = camera(64, 48);
+        let mut rng = row_rng(3, 1, 2);
+        for i in 0..50_000 {
+            let mut z = [0.0f32; 4];
+            let mut c = [0.0f32; 4];
+            let (mut lo, mut hi) = ([0u32; 4], [0u32; 4]);
+            for j in 0..4 {
+                let r = rng.next_u64();
+                (lo[j], hi[j]) = (r as u32, (r >> 32) as u32);
+                z[j] = match (i + j) % 7 {
+                    0 => 0.0,
+                    1 => f32::NAN,
+                    2 => 70.0,
+                    3 => f32::INFINITY,
+                    _ => rng.random::<f32>() * 6.0,
+                };
+                c[j] = rng.random::<f32>();
+            }
+            let got = cam
+                .readings(f32x4::new(z), f32x4::new(c), u32x4::new(lo), u32x4::new(hi))
+                .to_array();
+            for j in 0..4 {
+                let want = cam.reading(z[j], c[j], [lo[j], hi[j]]);
+                assert_eq!(got[j], u32::from(want), "z {} cos {}", z[j], c[j]);
+            }
+        }
+    }
+
+    #[test]
+    fn floor_u16_truncates_as_a_cast() {
+        let mut v = 0.0f32;
+        while v <= 65_535.0 {
+            for x in [v, v.next_up(), v.next_down().max(0.0), v + 0.5] {
+                if x <= 65_535.0 {
+                    assert_eq!(floor_u16(x), x as u16, "{x}");
+                }
+            }
+            v += 0.25;
+        }
     }
 
     #[test]

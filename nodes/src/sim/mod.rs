@@ -36,6 +36,8 @@ mod detector;
 mod localization;
 mod nav;
 mod partition;
+#[cfg(test)]
+mod render_pin;
 mod robot;
 mod rowcast;
 mod scene;

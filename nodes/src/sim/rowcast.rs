@@ -4,11 +4,15 @@
 //! A row's ray through pixel column `u` is `base + xs[u] · col` (any frame: world for the room,
 //! the object's frame for a solid), with `xs[u] = (u + ½ − cx) / fx`, so its z in the camera
 //! frame is 1 and its hit time is the pixel's depth. Each kernel keeps, per pixel, the nearest
-//! hit so far (`t`, 0 = none yet, then up to `far`), its instance and the cosine between the
-//! ray and the surface normal. The arithmetic is that of [`World::cast`](super::World::cast)
-//! (same slab test, same cylinder equations), so the render equals ray casting pixel by pixel.
+//! hit so far (`t`, 0 = none yet, then up to `far`), its instance and `|n · dir|`, the surface
+//! normal's component along the unnormalised ray; once every kernel has run on the row,
+//! [`normalise_cos`] divides it by `|dir|`, giving the cosine between the ray and the normal
+//! (one square root and division per pixel, not one per pixel and solid). The arithmetic is that
+//! of [`World::cast`](super::World::cast) (same slab test, same cylinder equations), so the
+//! render equals ray casting pixel by pixel.
 
 use glam::Vec3;
+use wide::f32x4;
 
 /// The nearest hits of one row of rays (slices of the row's columns being cast).
 pub(super) struct RowHits<'a> {
@@ -18,7 +22,7 @@ pub(super) struct RowHits<'a> {
     pub t: &'a mut [f32],
     /// Instance per column.
     pub inst: &'a mut [u8],
-    /// Cosine of the incidence angle per column.
+    /// `|n · dir|` per column (the cosine of the incidence angle after [`normalise_cos`]).
     pub cos: &'a mut [f32],
 }
 
@@ -37,11 +41,21 @@ fn inv_len(x: f32, y2p1: f32) -> f32 {
     1.0 / (x * x + y2p1).sqrt()
 }
 
+/// Turn a row's `|n · dir|` (as the kernels leave it in `cos`) into the cosine of the incidence
+/// angle: times `1 / |dir|` (`y` is the row's camera-frame ray y, `xs` the columns').
+#[inline(never)]
+pub(super) fn normalise_cos(xs: &[f32], cos: &mut [f32], y: f32) {
+    let y2p1 = y * y + 1.0;
+    for (c, &x) in cos.iter_mut().zip(xs) {
+        *c *= inv_len(x, y2p1);
+    }
+}
+
 /// The room (inside of the box `[lo, hi]`): where each ray leaves it, overwriting the row
 /// (`t`, `inst` = `structure`, `cos`). If the origin is outside the room nothing is hit: `t` =
-/// 0 and `cos` = 0. `y` is the row's camera-frame ray y.
+/// 0 and `cos` = 0.
 #[inline(never)] // one call per row and object; keeps the kernels apart in profiles
-pub(super) fn room(h: RowHits, r: &RowRays, y: f32, lo: Vec3, hi: Vec3, structure: u8) {
+pub(super) fn room(h: RowHits, r: &RowRays, lo: Vec3, hi: Vec3, structure: u8) {
     let o = r.origin;
     let inside = !(o.cmplt(lo).any() || o.cmpgt(hi).any());
     if !inside {
@@ -54,7 +68,6 @@ pub(super) fn room(h: RowHits, r: &RowRays, y: f32, lo: Vec3, hi: Vec3, structur
     // both factors finite unless the origin lies on a wall; the exit is the largest 1/t.
     let (rp, rn) = ((hi - o).recip(), (lo - o).recip());
     let (b, c) = (r.base, r.col);
-    let y2p1 = y * y + 1.0;
     for (((&x, t), inst), cos) in
         h.xs.iter()
             .zip(h.t.iter_mut())
@@ -75,70 +88,118 @@ pub(super) fn room(h: RowHits, r: &RowRays, y: f32, lo: Vec3, hi: Vec3, structur
         }
         let ok = inv > 0.0 && inv.is_finite();
         *t = if ok { 1.0 / inv } else { 0.0 };
-        *cos = if ok { dn * inv_len(x, y2p1) } else { 0.0 };
+        *cos = if ok { dn } else { 0.0 };
         *inst = structure;
     }
 }
 
 /// The box `[-h, h]` (object frame): slab test; a hit nearer than the row's (or than `far` where
 /// the row has none) replaces it with instance `id`.
+///
+/// Four pixels at a time in [`wide::f32x4`] lanes, with compare-selects rather than
+/// `f32::min` / `max` (the compiler does not vectorise a loop with their NaN rules): the same
+/// numbers as the scalar slab test of [`World::cast`](super::World::cast). A slab distance is
+/// NaN only if the ray is parallel to that slab (`d = 0`) and the origin lies on one of its
+/// planes; the other plane's distance is then ±∞, and [`slab`] returns it for both ends, as
+/// `min` / `max` of the pair did.
 #[inline(never)] // one call per row and object; keeps the kernels apart in profiles
-pub(super) fn cuboid(h: RowHits, r: &RowRays, y: f32, half: Vec3, far: f32, id: u8) {
+pub(super) fn cuboid(h: RowHits, r: &RowRays, half: Vec3, far: f32, id: u8) {
     let (o, b, c) = (r.origin, r.base, r.col);
     let (lo, hi) = (-half - o, half - o);
-    let y2p1 = y * y + 1.0;
-    for (((&x, tr), inst), cos) in
-        h.xs.iter()
-            .zip(h.t.iter_mut())
-            .zip(h.inst.iter_mut())
-            .zip(h.cos.iter_mut())
-    {
-        let d = b + c * x;
-        let inv = d.recip();
-        let (t1, t2) = (lo * inv, hi * inv);
-        let near = t1.min(t2);
-        let far_t = t1.max(t2);
-        let t_in = near.x.max(near.y).max(near.z);
-        let t_out = far_t.x.min(far_t.y).min(far_t.z);
-        let t = t_in.max(0.0);
-        let best = if *tr > 0.0 { *tr } else { far };
-        let hit = t_out >= t && t < best && !t_in.is_nan();
+    let s = f32x4::splat;
+    let (zero, far) = (s(0.0), s(far));
+    // One block of 4 pixels: new depths and cosines, and which lanes hit.
+    let block = |x: f32x4, tr: f32x4, cos: f32x4| {
+        let (dx, dy, dz) = (
+            s(b.x) + s(c.x) * x,
+            s(b.y) + s(c.y) * x,
+            s(b.z) + s(c.z) * x,
+        );
+        let (nx, fx) = slab(s(lo.x), s(hi.x), dx);
+        let (ny, fy) = slab(s(lo.y), s(hi.y), dy);
+        let (nz, fz) = slab(s(lo.z), s(hi.z), dz);
+        let t_in = max(max(nx, ny), nz);
+        let t_out = min(min(fx, fy), fz);
+        let t = max(t_in, zero);
+        let best = tr.simd_gt(zero).bitselect(tr, far);
+        let hit = t_out.simd_ge(t) & t.simd_lt(best) & t_in.simd_eq(t_in);
         // The entry face is the axis of the largest near distance (ties: x, then y).
-        let dn = if near.x >= near.y && near.x >= near.z {
-            d.x
-        } else if near.y >= near.z {
-            d.y
-        } else {
-            d.z
-        };
-        // Selects rather than a branch: the loop vectorises.
-        *tr = if hit { t } else { *tr };
-        *inst = if hit { id } else { *inst };
-        *cos = if hit {
-            dn.abs() * inv_len(x, y2p1)
-        } else {
-            *cos
-        };
+        let on_x = nx.simd_ge(ny) & nx.simd_ge(nz);
+        let dn = on_x.bitselect(dx, ny.simd_ge(nz).bitselect(dy, dz));
+        (
+            hit.bitselect(t, tr),
+            hit.bitselect(dn.abs(), cos),
+            hit.to_bitmask(),
+        )
+    };
+    for i in (0..h.xs.len()).step_by(4) {
+        let lanes = |v: &[f32]| f32x4::new(load4(v, i));
+        let (t, cos, hits) = block(lanes(h.xs), lanes(h.t), lanes(h.cos));
+        store4(h.t, i, t.to_array());
+        store4(h.cos, i, cos.to_array());
+        if hits != 0 {
+            for (j, inst) in h.inst[i..].iter_mut().take(4).enumerate() {
+                if hits >> j & 1 != 0 {
+                    *inst = id;
+                }
+            }
+        }
     }
+}
+
+/// `v[i..i + 4]`, padded with zeros past the end of `v` (`i < v.len()`).
+#[inline(always)]
+pub(super) fn load4<T: Copy + Default>(v: &[T], i: usize) -> [T; 4] {
+    match v.get(i..i + 4) {
+        Some(s) => [s[0], s[1], s[2], s[3]],
+        None => {
+            let mut a = [T::default(); 4];
+            a.iter_mut().zip(&v[i..]).for_each(|(a, x)| *a = *x);
+            a
+        }
+    }
+}
+
+/// Write `a` to `v[i..i + 4]`, as much of it as `v` holds (`i < v.len()`).
+#[inline(always)]
+pub(super) fn store4<T: Copy>(v: &mut [T], i: usize, a: [T; 4]) {
+    match v.get_mut(i..i + 4) {
+        Some(s) => s.copy_from_slice(&a),
+        None => v[i..].iter_mut().zip(a).for_each(|(x, a)| *x = a),
+    }
+}
+
+/// Entry and exit distances `(min, max)` of the slab `[lo, hi]` (relative to the origin) along
+/// direction component `d`, as `(t1.min(t2), t1.max(t2))` of `t1 = lo · (1/d)`, `t2 = hi · (1/d)`
+/// (at most one of them is NaN: then both are the other).
+#[inline(always)]
+fn slab(lo: f32x4, hi: f32x4, d: f32x4) -> (f32x4, f32x4) {
+    let inv = f32x4::splat(1.0) / d;
+    let (t1, t2) = (lo * inv, hi * inv);
+    let t2 = t2.is_nan().bitselect(t1, t2);
+    // A NaN `t1` fails both comparisons and yields `t2`.
+    (min(t1, t2), max(t1, t2))
+}
+
+/// Lanewise `a.min(b)` for `b` not NaN (`a` NaN gives `b`).
+#[inline(always)]
+fn min(a: f32x4, b: f32x4) -> f32x4 {
+    a.simd_lt(b).bitselect(a, b)
+}
+
+/// Lanewise `a.max(b)` for `b` not NaN (`a` NaN gives `b`).
+#[inline(always)]
+fn max(a: f32x4, b: f32x4) -> f32x4 {
+    a.simd_gt(b).bitselect(a, b)
 }
 
 /// The cylinder of radius `radius` along the object's y axis, `|y| ≤ half_height`: side and the
 /// cap facing the ray; a hit nearer than the row's replaces it with instance `id`.
-#[allow(clippy::too_many_arguments)]
 #[inline(never)] // one call per row and object; keeps the kernels apart in profiles
-pub(super) fn cylinder(
-    h: RowHits,
-    r: &RowRays,
-    y: f32,
-    radius: f32,
-    half_height: f32,
-    far: f32,
-    id: u8,
-) {
+pub(super) fn cylinder(h: RowHits, r: &RowRays, radius: f32, half_height: f32, far: f32, id: u8) {
     let (o, b, c) = (r.origin, r.base, r.col);
     let (rr, hh) = (radius * radius, half_height);
     let cc = o.x * o.x + o.z * o.z - rr;
-    let y2p1 = y * y + 1.0;
     for (((&x, tr), inst), cos) in
         h.xs.iter()
             .zip(h.t.iter_mut())
@@ -166,10 +227,6 @@ pub(super) fn cylinder(
         let hit = (side_ok || cap_ok) && t < best;
         *tr = if hit { t } else { *tr };
         *inst = if hit { id } else { *inst };
-        *cos = if hit {
-            dn.abs() * inv_len(x, y2p1)
-        } else {
-            *cos
-        };
+        *cos = if hit { dn.abs() } else { *cos };
     }
 }
