@@ -31,7 +31,7 @@ const LOGIC: [&str; 6] = ["sim", "mapper", "planner", "eval", "geom.rs", "config
 const NO_GROUND_TRUTH: [&str; 2] = ["mapper", "planner"];
 
 /// Crates (besides their own) the logic modules may use.
-const ALLOWED_CRATES: [&str; 17] = [
+const ALLOWED_CRATES: [&str; 18] = [
     "std",
     "core",
     "alloc",
@@ -49,6 +49,7 @@ const ALLOWED_CRATES: [&str; 17] = [
     "serde_json",
     "statrs",
     "thiserror",
+    "wide", // portable SIMD lanes (the renderer's kernels): pure arithmetic
 ];
 
 /// Crates allowed in one logic file only, with the reason.
