@@ -154,6 +154,9 @@ impl<T: Message> Subscriber<T> {
     }
 
     /// Drain the buffer and return only the newest sample, if any (never blocks).
+    ///
+    /// While draining it borrows two samples at once (the newest so far and the next), on top of
+    /// any the caller still holds: `subscriber_max_borrowed` must cover both.
     pub fn latest(&self) -> Result<Option<Received<T>>, ReceiveError> {
         let mut newest = None;
         while let Some(s) = self.receive()? {
