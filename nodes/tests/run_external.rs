@@ -32,8 +32,15 @@ subscriber_buffer = 12
 max_subscribers = 4
 "#;
 
-/// Waits for a stderr line containing `what` (status lines end in `\r`, reports in `\n`).
+/// What `vpsom run` says once every node it hosts has sent a heartbeat (its ports are open).
+const NODES_UP: &str = "nodes up (a heartbeat from each";
+
+/// Waits for a stderr line containing `what` (status lines end in `\r`, reports in `\n`), or
+/// returns at once if one is already in `log` (the launcher's lines come in no fixed order).
 fn wait_for(lines: &mpsc::Receiver<String>, log: &mut String, what: &str) {
+    if log.lines().any(|l| l.contains(what)) {
+        return;
+    }
     loop {
         let line = lines
             .recv_timeout(Duration::from_secs(120))
@@ -156,6 +163,8 @@ fn mapper_maps_frames_from_outside_and_scoring_is_skipped_without_a_scene() {
         &mut log,
         "no publisher yet on depth, detections, robot/state",
     );
+    // The mapper's subscribers exist once it has sent a heartbeat: no frame is sent before.
+    wait_for(&lines, &mut log, NODES_UP);
 
     // The driver.
     let cfg = Config::load_or_default(Some(&overlay)).unwrap().0;
@@ -204,7 +213,8 @@ fn mapper_maps_frames_from_outside_and_scoring_is_skipped_without_a_scene() {
     }
     assert_eq!(
         row(&stdout, "depth frames integrated by the mapper"),
-        FRAMES
+        FRAMES,
+        "{stdout}\n{log}"
     );
     // The mapper built the chair from the driver's frames: its front face is 1.5 m ahead.
     let map: serde_json::Value =
@@ -237,6 +247,7 @@ fn python_driver_frames_are_mapped_and_its_nan_pose_frame_is_counted() {
         &mut log,
         "no publisher yet on depth, detections, robot/state, nav/grid",
     );
+    wait_for(&lines, &mut log, NODES_UP);
     let driver_out = Command::new(&python)
         .arg(&driver)
         .arg(&ns)
@@ -291,7 +302,8 @@ fn python_driver_frames_are_mapped_and_its_nan_pose_frame_is_counted() {
     );
     assert_eq!(
         row(&stdout, "depth frames integrated by the mapper"),
-        SENT - 1
+        SENT - 1,
+        "{stdout}\n{log}"
     );
     assert!(log.contains("DepthFrame.camera_pose"), "{log}");
     let map: serde_json::Value =

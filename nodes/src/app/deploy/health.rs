@@ -111,6 +111,14 @@ impl HealthWatch {
         Ok(())
     }
 
+    /// Whether every one of `roles` has sent a heartbeat: its ports are open, so a driver that
+    /// starts publishing now loses nothing to a subscriber that is not there yet.
+    pub fn all_up(&self, roles: &[&str]) -> bool {
+        roles
+            .iter()
+            .all(|r| self.newest.keys().any(|(node, _)| node == r))
+    }
+
     /// Every node's inputs, each summed over the node's incarnations, by node then topic.
     pub fn accounts(&self) -> Vec<InputAccount> {
         let mut sum: BTreeMap<(String, String), InputAccount> = BTreeMap::new();

@@ -252,6 +252,7 @@ pub fn run(args: &RunArgs, cfg: &Config, exe: &Path) -> anyhow::Result<RunOutcom
     let mut goals = 0u64;
     let mut final_state = None;
     let mut failed = false;
+    let mut nodes_up = false;
     let mut last_status = Instant::now();
     let max_sim_ns = (cfg.run.max_sim_s * 1e9) as u64;
     let clock = if args.nodes.contains(&"sim") {
@@ -294,6 +295,13 @@ pub fn run(args: &RunArgs, cfg: &Config, exe: &Path) -> anyhow::Result<RunOutcom
             sim_ns = sim_ns.max(t);
         }
         health.poll(&mut launcher)?;
+        if !nodes_up && health.all_up(&args.nodes) {
+            nodes_up = true;
+            eprintln!(
+                "\nnodes up (a heartbeat from each, so their ports are open): {}",
+                args.nodes.join(", ")
+            );
+        }
         // Late joiners (a restarting mapper) get the history only from the publisher's side.
         resume.update_connections()?;
         for ev in launcher.poll() {
