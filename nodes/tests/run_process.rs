@@ -77,6 +77,30 @@ fn multi_process_run_terminates_and_matches_lockstep_quality() {
         runtime::ports::list_services(&ns).unwrap().is_empty(),
         "services left behind"
     );
+    // The live trace replays against its recorded maps to the stated tolerance: every map is
+    // compared, and the first ones (before any race of the state with a frame) are within it.
+    let trace = live.join("trace.mcap");
+    let check = Command::new(env!("CARGO_BIN_EXE_vpsom"))
+        .args(["replay", "--config", ideal, "--check"])
+        .arg(&trace)
+        .output()
+        .unwrap();
+    let text = String::from_utf8_lossy(&check.stdout);
+    let (within, maps): (u64, u64) = text
+        .split("live trace: ")
+        .nth(1)
+        .and_then(|s| {
+            let mut w = s.split_whitespace();
+            Some((w.next()?.parse().ok()?, w.nth(1)?.parse().ok()?))
+        })
+        .unwrap_or_else(|| {
+            panic!(
+                "no live-trace check:\n{text}\n{}",
+                String::from_utf8_lossy(&check.stderr)
+            )
+        });
+    assert_eq!(maps, info.count("/map/objects"), "{text}");
+    assert!(within >= 1, "{text}");
 
     vpsom(&[
         "run",

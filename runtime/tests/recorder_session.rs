@@ -25,6 +25,7 @@ fn tmp(name: &str) -> std::path::PathBuf {
 fn setup() -> RecorderSetup {
     RecorderSetup {
         scene: "synthetic".into(),
+        host: "live".into(),
         truth: vec![
             TruthBox {
                 name: "desk".into(),

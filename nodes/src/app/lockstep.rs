@@ -169,7 +169,10 @@ pub fn run_session(
         Some(path) => Some(runtime::recorder::Recorder::create(
             path,
             &cfg.recorder,
-            super::deploy::recorder_setup(&spec.scene, cfg),
+            runtime::recorder::RecorderSetup {
+                host: "lockstep".into(),
+                ..super::deploy::recorder_setup(&spec.scene, cfg)
+            },
         )?),
         None => None,
     };

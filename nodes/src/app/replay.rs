@@ -12,6 +12,9 @@
 //!   `/map/meta`), every decision with every F(v) term (`/planner/decisions`), every neck and nav
 //!   goal is compared with the recorded one, bit for bit; the first divergence is reported. For a
 //!   lockstep trace there is none.
+//! - `--check` on a live trace (host `live`: processes on real clocks, so the mapper saw its
+//!   frames at times of its own and the planner ran on whichever map was newest): the maps are
+//!   reproduced to a stated tolerance instead, see [`live`]; decisions and goals are not compared.
 //! - With another config or planner: the new maps, decisions and goals are written to a new trace
 //!   (`OUT/trace.mcap`), the decisions also as `OUT/decisions.csv`, and the final map as
 //!   `OUT/map.json` with its scores against the ground truth in `OUT/metrics.json` when the
@@ -43,6 +46,8 @@ use std::collections::{BTreeMap, HashMap, VecDeque};
 use std::fmt;
 use std::path::{Path, PathBuf};
 use std::sync::mpsc::{Receiver, sync_channel};
+
+pub mod live;
 
 /// Why a replay could not run.
 #[derive(Debug, thiserror::Error)]
@@ -128,6 +133,8 @@ pub struct ReplayReport {
     pub end_ns: u64,
     /// Why the replayed planner stopped, if it finished.
     pub finished: Option<String>,
+    /// The tolerance check of a live trace (`check` on a trace of host `live`).
+    pub live: Option<live::LiveCheck>,
 }
 
 impl fmt::Display for ReplayReport {
@@ -147,6 +154,9 @@ impl fmt::Display for ReplayReport {
         }
         if let Some(r) = &self.finished {
             writeln!(f, "planner finished: {r}")?;
+        }
+        if let Some(l) = &self.live {
+            write!(f, "{l}")?;
         }
         Ok(())
     }
@@ -172,6 +182,8 @@ struct Inputs {
     outputs: Recorded,
     scene: Option<String>,
     profile: Option<String>,
+    /// The host that recorded it (`lockstep`, `live`; `None` in traces from before the key).
+    host: Option<String>,
     dropped: u64,
 }
 
@@ -247,6 +259,7 @@ fn read_inputs(path: &Path) -> Result<Inputs, ReplayError> {
                     if name == SESSION_METADATA {
                         inp.scene = values.get("scene").cloned();
                         inp.profile = values.get("profile").cloned();
+                        inp.host = values.get("host").cloned();
                     } else if name == runtime::recorder::schemas::STATS_METADATA {
                         inp.dropped += values
                             .get("dropped_total")
@@ -611,6 +624,9 @@ pub fn replay(spec: &ReplaySpec) -> Result<ReplayReport, ReplayError> {
         ));
     }
     let cfg = &spec.config;
+    if spec.check && inp.host.as_deref() == Some("live") {
+        return live::check(path, inp, cfg);
+    }
     let camera = cfg.camera.camera();
     let mut mapper = Mapper::new(&cfg.mapper, &camera)?;
     let mut planner: Box<dyn ViewPlanner> = planner::make_planner(&cfg.planner, &cfg.camera);

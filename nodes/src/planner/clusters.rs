@@ -6,6 +6,11 @@
 //! which no foreground object is known yet counts as unfinished until its centre has been in view
 //! from at least `bootstrap.empty_cluster_sectors` of `bootstrap.sectors` angular sectors around
 //! it ([`SideTracker`]): an empty table is "looked at from enough sides" before it is left.
+//! No cluster is done before it has been *approached*: in view from within
+//! `bootstrap.approach_m` of its support's footprint circle. A table seen only from across the
+//! room shows its large objects, which may complete from there, but not its small ones (an apple
+//! at 3 m is ~15 px, below what a YOLO-class detector finds reliably), so without this rule its
+//! cluster counted as done with most of its objects never mapped.
 //! Foreground objects without a cluster (`cluster_id = −1`) count in f_a but not for termination.
 
 use crate::geom::{Camera, Cuboid};
@@ -52,6 +57,9 @@ pub struct ClusterInfo {
     /// Sectors (bit mask, see [`SideTracker`]) from which the cluster was seen; filled by
     /// [`clusters`] and [`first_unfinished`], 0 from [`cluster_info`].
     pub sides_seen: u64,
+    /// Whether the cluster was in view from near (see [`SideTracker`]); filled like
+    /// `sides_seen`, false from [`cluster_info`].
+    pub approached: bool,
 }
 
 /// Geometry of cluster `id` (centre, footprint radius, earliest sighting, fg counts); `None` if
@@ -86,6 +94,7 @@ pub fn cluster_info(map: &ObjectMap, id: i32, eps_sopm: f32) -> Option<ClusterIn
         foreground_done: done,
         done: fg > 0 && done == fg,
         sides_seen: 0,
+        approached: false,
     })
 }
 
@@ -118,10 +127,7 @@ pub fn clusters(
         .filter(|o| o.is_background())
         .filter_map(|o| Some((o, cluster_info(map, o.id as i32, eps_sopm)?)))
         .map(|(o, mut c)| {
-            c.sides_seen = sides.mask(c.id);
-            if c.foreground == 0 {
-                c.done = sides.sides(c.id) >= min_sides || is_duplicate(map, o);
-            }
+            sides.judge(map, o, &mut c, min_sides);
             c
         })
         .collect();
@@ -146,10 +152,7 @@ pub fn first_unfinished(
         let Some(mut c) = cluster_info(map, id, eps_sopm) else {
             continue;
         };
-        c.sides_seen = sides.mask(id);
-        if c.foreground == 0 {
-            c.done = sides.sides(id) >= min_sides || is_duplicate(map, o);
-        }
+        sides.judge(map, o, &mut c, min_sides);
         if !c.done && best.is_none_or(|b| (c.first_seen_ns, c.id) < (b.first_seen_ns, b.id)) {
             best = Some(c);
         }
@@ -170,25 +173,69 @@ pub fn unfinished_centroid(map: &ObjectMap, info: &ClusterInfo, eps_sopm: f32) -
     if n == 0 { info.center } else { sum / n as f32 }
 }
 
-/// Remembers from which angular sectors each background object's centre has been in view.
-/// Fixed capacity ([`MAX_OBJECTS`] clusters, 64 sectors): updating it never allocates.
+/// Remembers from which angular sectors each background object's centre has been in view, and
+/// whether it was in view from near: from within `approach` of its footprint's bounding circle
+/// (xy). Fixed capacity ([`MAX_OBJECTS`] clusters, 64 sectors): updating it never allocates.
 #[derive(Debug, Clone)]
 pub struct SideTracker {
     sectors: usize,
+    approach: f32,
     ids: [i32; MAX_OBJECTS],
     masks: [u64; MAX_OBJECTS],
+    near: [bool; MAX_OBJECTS],
     len: usize,
 }
 
 impl SideTracker {
-    /// A tracker with `sectors` (1..=64) sectors around each cluster.
+    /// A tracker with `sectors` (1..=64) sectors around each cluster, without the approach rule
+    /// (every cluster counts as approached; see [`SideTracker::with_approach`]).
     pub fn new(sectors: usize) -> Self {
         Self {
             sectors: sectors.clamp(1, 64),
+            approach: f32::INFINITY,
             ids: [0; MAX_OBJECTS],
             masks: [0; MAX_OBJECTS],
+            near: [false; MAX_OBJECTS],
             len: 0,
         }
+    }
+
+    /// Views count as near a background object when taken within `metres` of its footprint's
+    /// bounding circle (xy).
+    pub fn with_approach(mut self, metres: f32) -> Self {
+        self.approach = metres;
+        self
+    }
+
+    /// Fill `c`'s `sides_seen` and `approached` and decide its `done` (module docs): not before
+    /// it was approached; without foreground objects, once seen from `min_sides` sectors (or at
+    /// once if its background object `o` duplicates an earlier one).
+    pub fn judge(&self, map: &ObjectMap, o: &MapObject, c: &mut ClusterInfo, min_sides: usize) {
+        c.sides_seen = self.mask(c.id);
+        c.approached = self.approached(c.id);
+        if is_duplicate(map, o) && c.foreground == 0 {
+            c.done = true;
+        } else if c.foreground == 0 {
+            c.done = c.approached && self.sides(c.id) >= min_sides;
+        } else {
+            c.done &= c.approached;
+        }
+    }
+
+    /// [`SideTracker::judge`] for the cluster of background object `c.id`, if it is in `map`.
+    pub fn judge_by_id(&self, map: &ObjectMap, c: &mut ClusterInfo, min_sides: usize) {
+        if let Some(o) = map.objects().iter().find(|o| o.id as i32 == c.id) {
+            self.judge(map, o, c, min_sides);
+        }
+    }
+
+    /// Whether cluster `id` was in view from near (always, without the approach rule).
+    pub fn approached(&self, id: i32) -> bool {
+        self.approach.is_infinite()
+            || self.ids[..self.len]
+                .iter()
+                .position(|i| *i == id)
+                .is_some_and(|k| self.near[k])
     }
 
     /// Number of sectors.
@@ -215,6 +262,12 @@ impl SideTracker {
             }
             let s = self.sector_of(c, view.position);
             self.mark(o.id as i32, s);
+            let reach = 0.5 * Vec2::new(o.size[0], o.size[1]).length() + self.approach;
+            if c.truncate().distance(view.position.truncate()) <= reach
+                && let Some(k) = self.ids[..self.len].iter().position(|i| *i == o.id as i32)
+            {
+                self.near[k] = true;
+            }
         }
     }
 
@@ -226,6 +279,7 @@ impl SideTracker {
         } else if self.len < MAX_OBJECTS {
             self.ids[self.len] = id;
             self.masks[self.len] = bit;
+            self.near[self.len] = false;
             self.len += 1;
         }
     }
@@ -311,5 +365,42 @@ mod tests {
         assert!(first_unfinished(&m, 0.42, &t, 4, &[]).is_none());
         assert!(first_unfinished(&m, 0.42, &t, 5, &[]).is_some());
         assert!(first_unfinished(&m, 0.42, &t, 5, &[3]).is_none());
+    }
+
+    /// A desk whose one mapped object completed from across the room is not done until a view
+    /// from near it: its small objects are not mapped from there.
+    #[test]
+    fn a_cluster_seen_only_from_afar_is_not_done() {
+        let mut m = boxed_zeroed::<ObjectMap>();
+        put(&mut m, 3, true, 3, [0.0, 0.0, 0.4], [1.0, 1.0, 0.8]);
+        put(&mut m, 4, false, 3, [0.2, 0.0, 0.85], [0.1, 0.1, 0.1]);
+        m.objects[1].complete = 1;
+        let cam = Camera::from_fov(640, 480, 60.0, 46.8, 0.5, 8.0);
+        let mount = CameraMount::default();
+        let mut t = SideTracker::new(8).with_approach(1.0);
+        let look_from = |t: &mut SideTracker, d: f32| {
+            let base = [d, 0.0, std::f32::consts::PI];
+            t.observe(
+                &m,
+                &cam,
+                &View::new(mount.camera_pose(base, 0.0, mount.pitch())),
+            );
+        };
+        // 4 m from the centre: 3.3 m from the footprint circle (radius 0.71 m).
+        look_from(&mut t, 4.0);
+        assert_eq!(t.sides(3), 1);
+        assert!(!t.approached(3));
+        let c = &clusters(&m, 0.42, &t, 4)[0];
+        assert!(!c.done && !c.approached && c.foreground_done == 1);
+        assert_eq!(first_unfinished(&m, 0.42, &t, 4, &[]).unwrap().id, 3);
+        // 1.6 m from the centre: 0.9 m from the circle.
+        look_from(&mut t, 1.6);
+        assert!(t.approached(3));
+        assert!(clusters(&m, 0.42, &t, 4)[0].done);
+        assert!(first_unfinished(&m, 0.42, &t, 4, &[]).is_none());
+        // Without the rule, the far view was enough.
+        let mut off = SideTracker::new(8);
+        look_from(&mut off, 4.0);
+        assert!(clusters(&m, 0.42, &off, 4)[0].done);
     }
 }

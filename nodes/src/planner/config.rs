@@ -207,6 +207,9 @@ pub struct BootstrapConfig {
     /// A cluster with no foreground object yet is done once its centre was in view from this
     /// many distinct sectors.
     pub empty_cluster_sectors: usize,
+    /// No cluster is done before it was in view from within this distance of its support's
+    /// footprint circle, metres (`inf`: the rule off); see `planner::clusters`.
+    pub approach_m: f32,
     /// While exploring (the base driving to frontiers) the neck sweeps
     /// `amplitude · sin(2π t / period)` about the base's heading: amplitude, degrees.
     pub explore_neck_amplitude_deg: f32,
@@ -459,6 +462,12 @@ impl PlannerConfig {
             b.empty_cluster_sectors,
             0,
             b.sectors,
+        )?;
+        c.require(
+            b.approach_m > 0.0,
+            "planner.bootstrap.approach_m",
+            b.approach_m,
+            "must be > 0 (inf: the rule off)",
         )?;
         c.in_range(
             "planner.bootstrap.explore_neck_amplitude_deg",

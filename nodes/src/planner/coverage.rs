@@ -137,6 +137,7 @@ mod tests {
             foreground_done: 0,
             done: false,
             sides_seen: 0,
+            approached: false,
         };
         let p = CoverageParams {
             waypoints: 4,

@@ -279,8 +279,10 @@ impl GbvJob {
                 [self.base[0], self.base[1]],
             );
             let sectors = p.sectors.clamp(1, 64);
+            // Sectors matter for a cluster without foreground objects that was approached;
+            // any ring pose approaches one that was not.
             let fresh = |b: &[f32; 3]| {
-                if info.foreground > 0 {
+                if info.foreground > 0 || !info.approached {
                     return true;
                 }
                 let d = glam::Vec2::new(b[0] - info.center.x, b[1] - info.center.y);

@@ -207,13 +207,15 @@ impl GiveUps {
         objs.len()
     }
 
-    /// Whether cluster `info` needs no more views: done, its background object untrusted, or no
-    /// foreground object of it open (a cluster without foreground objects follows `info.done`).
-    /// Does not allocate.
+    /// Whether cluster `info` needs no more views: done, its background object untrusted, or
+    /// approached with no foreground object of it open (a cluster without foreground objects
+    /// follows `info.done`). Does not allocate.
     pub fn settled(&self, map: &ObjectMap, info: &ClusterInfo) -> bool {
         info.done
             || members(map, info.id).any(|o| o.is_background() && !self.trusted(o))
-            || info.foreground > 0 && self.open_members(map, info.id).next().is_none()
+            || info.foreground > 0
+                && info.approached
+                && self.open_members(map, info.id).next().is_none()
     }
 
     /// Mark every given-up or untrusted foreground object of `map` complete (for a planning
@@ -283,7 +285,8 @@ mod tests {
         let mut g = GiveUps::new(rule(), 0.42, 1);
         let m = map_with(0.6, 1);
         g.start(&m, 1);
-        let info = crate::planner::clusters::cluster_info(&m, 1, 0.42).unwrap();
+        let mut info = crate::planner::clusters::cluster_info(&m, 1, 0.42).unwrap();
+        info.approached = true;
         assert!(!g.settled(&m, &info));
         // Rounds that did not observe it do not count.
         for _ in 0..5 {

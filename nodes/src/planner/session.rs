@@ -477,7 +477,7 @@ impl Session {
             seen_radius: cfg.frontier.seen_radius,
             goals: Goals::new(),
             buffers: Buffers::default(),
-            sides: SideTracker::new(cfg.bootstrap.sectors),
+            sides: SideTracker::new(cfg.bootstrap.sectors).with_approach(cfg.bootstrap.approach_m),
             given_up: Vec::with_capacity(shm_types::MAX_OBJECTS),
             clusters_done: None,
             objects_given_up: 0,

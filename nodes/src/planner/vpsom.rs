@@ -212,15 +212,15 @@ impl VpsomPlanner {
     fn target(&self, map: &ObjectMap) -> Option<Target> {
         let eps = self.cfg.eps_sopm;
         let (sides, closed) = (&self.session.sides, &self.closed);
-        let open = |c: &ClusterInfo| {
-            !(c.done
-                || self.give_ups.settled(map, c)
-                || c.foreground == 0 && sides.sides(c.id) >= self.min_sides())
-        };
+        let open = |c: &ClusterInfo| !(c.done || self.give_ups.settled(map, c));
         let tracked = self
             .tracked
             .filter(|id| !closed.contains(id))
             .and_then(|id| clusters::cluster_info(map, id, eps))
+            .map(|mut c| {
+                sides.judge_by_id(map, &mut c, self.min_sides());
+                c
+            })
             .filter(open);
         let info = tracked.or_else(|| {
             clusters::first_unfinished(map, eps, sides, self.min_sides(), closed)
@@ -425,8 +425,12 @@ mod tests {
     use crate::planner::synth::add_object;
     use shm_types::{OccupancyGrid, boxed_zeroed, grid_cell, nav_status};
 
+    /// The default planner without the approach rule (`bootstrap.approach_m`): these tests
+    /// never move the camera, so no cluster would ever be approached.
     fn planner() -> VpsomPlanner {
-        VpsomPlanner::new(&PlannerConfig::default(), &CameraConfig::default())
+        let mut cfg = PlannerConfig::default();
+        cfg.bootstrap.approach_m = f32::INFINITY;
+        VpsomPlanner::new(&cfg, &CameraConfig::default())
     }
 
     /// A desk (cluster 1) at (2, 0) with a cup seen from `from` (complete if `done`).
@@ -535,6 +539,37 @@ mod tests {
     }
 
     #[test]
+    fn a_done_cluster_seen_only_from_afar_gets_a_gbv_before_the_room_is_explored() {
+        // The default approach rule; the desk's one object completed from 2 m away.
+        let mut p = VpsomPlanner::new(&PlannerConfig::default(), &CameraConfig::default());
+        let map = desk_map(&[[4.0, 0.0], [2.0, 2.0], [0.0, 0.0], [2.0, -2.0]], true);
+        let (empty, explore) = (boxed_zeroed::<OccupancyGrid>(), grid(20));
+        let mut state = RobotState {
+            neck_pitch: p.mount.pitch(),
+            ..Default::default()
+        };
+        // The camera at the origin looks at the desk: 1.36 m from its footprint circle.
+        p.neck_goal(&map, &state, 0);
+        let step = p.next_goal(&inputs(&map, &state, &empty, &explore), 0);
+        let Step::Goal(g) = settle(&mut p, step) else {
+            panic!("a GBV goal");
+        };
+        assert_eq!((g.kind, g.cluster_id), (goal_kind::GBV, 1));
+        let d = (g.pose[0] - 2.0).hypot(g.pose[1]);
+        assert!(d < 0.64 + 1.0, "the goal approaches the desk: {d} m");
+        // There, looking at the desk: approached, so done; the room is explored next.
+        state.base_pose = g.pose;
+        state.nav_goal_id = g.goal_id;
+        state.nav_status = nav_status::REACHED;
+        p.neck_goal(&map, &state, 1);
+        let step = p.next_goal(&inputs(&map, &state, &empty, &explore), 2);
+        let Step::Goal(g) = settle(&mut p, step) else {
+            panic!("a frontier goal");
+        };
+        assert_eq!(g.kind, goal_kind::FRONTIER);
+    }
+
+    #[test]
     fn an_open_cluster_supersedes_a_frontier_goal() {
         let mut p = planner();
         let done = desk_map(&[[4.0, 0.0], [2.0, 2.0], [0.0, 0.0], [2.0, -2.0]], true);
@@ -570,6 +605,7 @@ mod tests {
         let mut cfg = PlannerConfig::default();
         cfg.give_up.rounds = 3;
         cfg.give_up.min_drop = 0.02;
+        cfg.bootstrap.approach_m = f32::INFINITY;
         let mut p = VpsomPlanner::new(&cfg, &CameraConfig::default());
         let mut map = desk_map(&[[0.0, 0.0]], false);
         let h = map.objects[1].h_sopm;

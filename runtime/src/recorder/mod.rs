@@ -332,6 +332,10 @@ pub struct RecorderSetup {
     pub truth: Vec<TruthBox>,
     /// Serve the recorded channels live to Foxglove on this port ([`live`]; 0 = any free port).
     pub live_port: Option<u16>,
+    /// The host that ran the logic (MCAP metadata `session`, key `host`): `lockstep` (one
+    /// process, simulated clock: `vpsom replay --check` reproduces it exactly) or `live`
+    /// (processes on real clocks: reproduced to a tolerance); empty if unknown.
+    pub host: String,
 }
 
 /// Latency of one node or path over the last summary period.

@@ -213,6 +213,7 @@ impl WriterState {
                     cfg.depth_decimation().to_string(),
                 ),
                 ("truth_objects".to_string(), setup.truth.len().to_string()),
+                ("host".to_string(), setup.host.clone()),
             ]),
         };
         mcap.write_metadata(&session).map_err(mcap_err)?;

@@ -29,7 +29,8 @@ pub fn recorder_node(args: &RunArgs, cfg: &Config) -> Result<(), HostError> {
     Ok(())
 }
 
-/// What the recorder needs to draw: the scene's true cuboids and the camera geometry.
+/// What the recorder needs to draw: the scene's true cuboids and the camera geometry (host
+/// `live`: the lockstep host overrides it).
 pub fn recorder_setup(scene: &Scene, cfg: &Config) -> RecorderSetup {
     RecorderSetup {
         scene: scene.name.clone(),
@@ -46,6 +47,7 @@ pub fn recorder_setup(scene: &Scene, cfg: &Config) -> RecorderSetup {
             })
             .collect(),
         live_port: None,
+        host: "live".into(),
     }
 }
 
@@ -89,6 +91,7 @@ impl RecorderHost {
                 mount: mount(cfg),
                 truth: Vec::new(),
                 live_port: None,
+                host: "live".into(),
             },
         };
         let setup = RecorderSetup {
