@@ -358,6 +358,30 @@ fn depth_stream(path: &Path) -> Receiver<Result<(u64, RawImage), String>> {
     rx
 }
 
+/// The depth image recorded at `t` from [`depth_stream`]'s `frames` (earlier ones, without
+/// meta, are skipped).
+fn image_at(
+    frames: &Receiver<Result<(u64, RawImage), String>>,
+    path: &Path,
+    t: u64,
+) -> Result<RawImage, ReplayError> {
+    loop {
+        match frames.recv() {
+            Ok(Ok((ft, img))) if ft == t => return Ok(img),
+            // A frame without meta (cannot happen in one recorder's file): skip it.
+            Ok(Ok((ft, _))) if ft < t => continue,
+            Ok(Ok((ft, _))) => {
+                return Err(trace_err(
+                    path,
+                    format!("depth frame at {ft} ns missing before {t} ns"),
+                ));
+            }
+            Ok(Err(e)) => return Err(trace_err(path, e)),
+            Err(_) => return Err(trace_err(path, format!("no depth frame at {t} ns"))),
+        }
+    }
+}
+
 fn header(seq: u64, stamp_ns: u64, sim_time_ns: u64) -> Header {
     Header {
         seq,
@@ -681,21 +705,7 @@ pub fn replay(spec: &ReplaySpec) -> Result<ReplayReport, ReplayError> {
             grid_of(g, &mut nav).map_err(|e| trace_err(path, e))?;
         }
         if let Some(m) = inp.depth_meta.get(&t) {
-            let img = loop {
-                match frames.recv() {
-                    Ok(Ok((ft, img))) if ft == t => break img,
-                    // A frame without meta (cannot happen in one recorder's file): skip it.
-                    Ok(Ok((ft, _))) if ft < t => continue,
-                    Ok(Ok((ft, _))) => {
-                        return Err(trace_err(
-                            path,
-                            format!("depth frame at {ft} ns missing before {t} ns"),
-                        ));
-                    }
-                    Ok(Err(e)) => return Err(trace_err(path, e)),
-                    Err(_) => return Err(trace_err(path, format!("no depth frame at {t} ns"))),
-                }
-            };
+            let img = image_at(&frames, path, t)?;
             if (m.width, m.height) != (cfg.camera.width, cfg.camera.height) {
                 return Err(trace_err(
                     path,

@@ -21,8 +21,8 @@
 //! its GBV job came back, are the host's timing.
 
 use super::{
-    Divergence, Inputs, ReplayError, ReplayReport, depth_stream, detections_of, frame_of, state_of,
-    trace_err,
+    Divergence, Inputs, ReplayError, ReplayReport, depth_stream, detections_of, frame_of, image_at,
+    state_of, trace_err,
 };
 use crate::config::Config;
 use crate::mapper::Mapper;
@@ -165,20 +165,7 @@ pub(super) fn check(path: &Path, inp: Inputs, cfg: &Config) -> Result<ReplayRepo
             };
             next_frame += 1;
             let ft = m.sim_time_ns;
-            let img = loop {
-                match frames.recv() {
-                    Ok(Ok((t, img))) if t == ft => break img,
-                    Ok(Ok((t, _))) if t < ft => continue,
-                    Ok(Ok((t, _))) => {
-                        return Err(trace_err(
-                            path,
-                            format!("depth frame at {ft} ns missing before {t} ns"),
-                        ));
-                    }
-                    Ok(Err(e)) => return Err(trace_err(path, e)),
-                    Err(_) => return Err(trace_err(path, format!("no depth frame at {ft} ns"))),
-                }
-            };
+            let img = image_at(&frames, path, ft)?;
             while let Some(s) = inp.states.get(next_state).filter(|s| s.sim_time_ns <= ft) {
                 state = state_of(s).map_err(|e| trace_err(path, format!("/robot/state: {e}")))?;
                 next_state += 1;
