@@ -638,6 +638,10 @@ pub fn replay(spec: &ReplaySpec) -> Result<ReplayReport, ReplayError> {
             "no /robot/state messages: replay needs a trace of the `replay` profile",
         ));
     }
+    let cfg = &spec.config;
+    if spec.check && inp.host.as_deref() == Some("live") {
+        return live::check(path, inp, cfg);
+    }
     if spec.check && inp.dropped > 0 {
         return Err(trace_err(
             path,
@@ -646,10 +650,6 @@ pub fn replay(spec: &ReplaySpec) -> Result<ReplayReport, ReplayError> {
                 inp.dropped
             ),
         ));
-    }
-    let cfg = &spec.config;
-    if spec.check && inp.host.as_deref() == Some("live") {
-        return live::check(path, inp, cfg);
     }
     let camera = cfg.camera.camera();
     let mut mapper = Mapper::new(&cfg.mapper, &camera)?;

@@ -52,6 +52,8 @@ pub struct LiveCheck {
     pub max_center_m: f64,
     /// Largest size deviation of a matched object, per axis, m.
     pub max_size_m: f64,
+    /// Messages the recorder dropped (a dropped input makes the maps after it differ).
+    pub dropped: u64,
 }
 
 impl fmt::Display for LiveCheck {
@@ -60,8 +62,9 @@ impl fmt::Display for LiveCheck {
             f,
             "live trace: {} of {} maps within tolerance (centre {CENTER_TOL_M} m, size \
              {SIZE_TOL_M} m, same ids, classes and frame counts); {} objects compared, largest \
-             deviation centre {:.4} m, size {:.4} m; decisions and goals not compared (host timing)",
-            self.within, self.maps, self.objects, self.max_center_m, self.max_size_m
+             deviation centre {:.4} m, size {:.4} m; {} messages dropped by the recorder; decisions \
+             and goals not compared (host timing)",
+            self.within, self.maps, self.objects, self.max_center_m, self.max_size_m, self.dropped
         )
     }
 }
@@ -153,7 +156,10 @@ pub(super) fn check(path: &Path, inp: Inputs, cfg: &Config) -> Result<ReplayRepo
         inp.detections.values().map(|d| (d.frame_seq, d)).collect();
     let frames = depth_stream(path);
     let mut report = ReplayReport::default();
-    let mut stats = LiveCheck::default();
+    let mut stats = LiveCheck {
+        dropped: inp.dropped,
+        ..LiveCheck::default()
+    };
     let (mut next_frame, mut next_state) = (0usize, 0usize);
     let mut state = RobotState::default();
     let mut integrated = 0u32;
