@@ -9,8 +9,18 @@ use nodes::planner::PlannerStatus;
 use nodes::sim::Scene;
 use std::path::Path;
 
+/// Ideal sensing without the approach rule (`[planner.bootstrap] approach_m`): these tests pin
+/// the exploration and give-up rules on their own. With the rule, the extra visit it makes
+/// changes both sessions: on two-tables a spurious fifth estimate appears and is given up (P 0.8,
+/// "objects given up: 1"); on corner-box the backpack completes and is not given up.
+fn ideal() -> Config {
+    let mut c = Config::ideal_sensing();
+    c.planner.bootstrap.approach_m = f32::INFINITY;
+    c
+}
+
 fn session(scene: &str, label: &str) -> (SessionSpec, SessionResult) {
-    session_with(scene, label, Config::ideal_sensing())
+    session_with(scene, label, ideal())
 }
 
 fn session_with(scene: &str, label: &str, base: Config) -> (SessionSpec, SessionResult) {
@@ -63,7 +73,7 @@ fn an_object_in_a_corner_is_given_up_not_timed_out() {
     // seen in one or two frames no longer pulls the GBV target centroid off the table, the
     // views aim better and the backpack's SOPM completes (H_sopm < ε_sopm in 10 goals, path 14.5 m
     // against 18.2 m), so the stall and out-of-views rules this test is about are not reached.
-    let mut base = Config::ideal_sensing();
+    let mut base = ideal();
     base.planner.min_observations = 0;
     let (spec, r) = session_with("corner-box", "vpsom", base);
     let m = &r.metrics;
