@@ -65,8 +65,11 @@ fn planner(cfg: &PlannerConfig) -> VpsomPlanner {
 }
 
 /// Few rounds per cluster, and a stall rule that never fires (observations never grow here).
+/// The rules under test, without the approach rule (`[planner.bootstrap] approach_m`): the
+/// camera never moves here, so with it every desk would stay open until a view from near.
 fn cfg(reopen_rounds: u32, max_reopens: u32) -> PlannerConfig {
     let mut c = PlannerConfig::default();
+    c.bootstrap.approach_m = f32::INFINITY;
     c.gbv.max_rounds_per_cluster = 3;
     c.gbv.reopen_rounds = reopen_rounds;
     c.gbv.max_reopens = max_reopens;

@@ -479,7 +479,10 @@ fn gbv_rounds_do_not_return_to_a_view_already_taken() {
 /// stays on the last goal's cluster; the sweep is for the start, before any cluster is known.
 #[test]
 fn camera_stays_on_the_cluster_when_all_are_done_during_a_goal() {
-    let cfg = PlannerConfig::default();
+    // Without the approach rule: the base stays 2.8 m from the cup, so with it the cluster
+    // would not be done and the LBV would still be choosing views of it.
+    let mut cfg = PlannerConfig::default();
+    cfg.bootstrap.approach_m = f32::INFINITY;
     let camera = CameraConfig::default();
     let mut planner = make_planner(&cfg, &camera);
     let mut map = one_cup_map([1.0, 0.0]);
