@@ -213,12 +213,12 @@ impl SideTracker {
     pub fn judge(&self, map: &ObjectMap, o: &MapObject, c: &mut ClusterInfo, min_sides: usize) {
         c.sides_seen = self.mask(c.id);
         c.approached = self.approached(c.id);
-        if is_duplicate(map, o) && c.foreground == 0 {
-            c.done = true;
-        } else if c.foreground == 0 {
-            c.done = c.approached && self.sides(c.id) >= min_sides;
-        } else {
+        // `is_duplicate` scans the map: only for clusters without foreground objects (the LBV
+        // thread judges every cluster each cycle).
+        if c.foreground > 0 {
             c.done &= c.approached;
+        } else {
+            c.done = is_duplicate(map, o) || c.approached && self.sides(c.id) >= min_sides;
         }
     }
 
