@@ -306,7 +306,7 @@ typedef struct vpsom_MapObject {
     uint16_t sopm_obs[648];                  /* offset 2676, count */
     float points[64][3];                     /* offset 3972, m */
     float point_los[64][3];                  /* offset 4740, 1 */
-    uint32_t reserved_tail;                  /* offset 5508, pad */
+    float support_height;                    /* offset 5508, m */
 } vpsom_MapObject;
 VPSOM_STATIC_ASSERT(sizeof(vpsom_MapObject) == 5512, "vpsom_MapObject: size");
 VPSOM_STATIC_ASSERT(VPSOM_ALIGNOF(vpsom_MapObject) == 8, "vpsom_MapObject: alignment");
@@ -333,7 +333,7 @@ VPSOM_STATIC_ASSERT(offsetof(vpsom_MapObject, sopm_prob) == 84, "vpsom_MapObject
 VPSOM_STATIC_ASSERT(offsetof(vpsom_MapObject, sopm_obs) == 2676, "vpsom_MapObject.sopm_obs: offset");
 VPSOM_STATIC_ASSERT(offsetof(vpsom_MapObject, points) == 3972, "vpsom_MapObject.points: offset");
 VPSOM_STATIC_ASSERT(offsetof(vpsom_MapObject, point_los) == 4740, "vpsom_MapObject.point_los: offset");
-VPSOM_STATIC_ASSERT(offsetof(vpsom_MapObject, reserved_tail) == 5508, "vpsom_MapObject.reserved_tail: offset");
+VPSOM_STATIC_ASSERT(offsetof(vpsom_MapObject, support_height) == 5508, "vpsom_MapObject.support_height: offset");
 
 /* vpsom::ObjectMap: 705600 bytes, alignment 8 */
 typedef struct vpsom_ObjectMap {

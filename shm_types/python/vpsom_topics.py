@@ -250,7 +250,7 @@ class MapObject(ctypes.Structure):
         ("sopm_obs", ctypes.c_uint16 * 648),  # offset 2676, count
         ("points", (ctypes.c_float * 3) * 64),  # offset 3972, m
         ("point_los", (ctypes.c_float * 3) * 64),  # offset 4740, 1
-        ("reserved_tail", ctypes.c_uint32),  # offset 5508, pad
+        ("support_height", ctypes.c_float),  # offset 5508, m
     ]
 
     @staticmethod
@@ -584,7 +584,7 @@ LAYOUT = {
         "sopm_obs": {"offset": 2676, "size": 1296, "type": "u16", "dims": [648], "unit": "count"},
         "points": {"offset": 3972, "size": 768, "type": "f32", "dims": [64, 3], "unit": "m"},
         "point_los": {"offset": 4740, "size": 768, "type": "f32", "dims": [64, 3], "unit": "1"},
-        "reserved_tail": {"offset": 5508, "size": 4, "type": "u32", "dims": [], "unit": "pad"},
+        "support_height": {"offset": 5508, "size": 4, "type": "f32", "dims": [], "unit": "m"},
     }},
     "ObjectMap": {"type_name": "vpsom::ObjectMap", "size": 705600, "align": 8, "fields": {
         "header": {"offset": 0, "size": 24, "type": "Header", "dims": [], "unit": "struct"},

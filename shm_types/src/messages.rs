@@ -504,8 +504,9 @@ pub struct MapObject {
     pub points: [[f32; 3]; MAX_OBJECT_POINTS],
     /// Mean unit line of sight (camera → point) of each sample point over the views that saw it.
     pub point_los: [[f32; 3]; MAX_OBJECT_POINTS],
-    /// Padding, always 0.
-    pub reserved_tail: u32,
+    /// Background objects: world z (m) of the supporting plane whose foreground objects form
+    /// its cluster (0 while the mapper has fitted none); 0 for foreground objects.
+    pub support_height: f32,
 }
 
 impl MapObject {
@@ -598,6 +599,11 @@ impl MapObject {
             // A mean of unit vectors, normalised or not: each component within [-1, 1].
             c.within(f("point_los"), l, 1.0 + 1e-3)?;
         }
+        c.within(
+            f("support_height"),
+            &[self.support_height],
+            MAX_WORLD_COORD_M,
+        )?;
         Ok(())
     }
 }
@@ -662,7 +668,7 @@ impl ObjectMap {
 /// [`sopm_shape`]; `sopm_rows × sopm_cols` ≤ [`MAX_SOPM_CELLS`], both zero (no SOPM yet) or both
 /// non-zero; every used `sopm_prob` in `[0, 1]`; `sample_count` ≤ [`MAX_OBJECT_POINTS`]; each
 /// used point within [`MAX_WORLD_COORD_M`] and each component of its `point_los` within
-/// `[-1, 1]` (1e-3 slack).
+/// `[-1, 1]` (1e-3 slack); `support_height` within [`MAX_WORLD_COORD_M`].
 ///
 /// Not checked: that a foreground object's `cluster_id` names a background object of the same
 /// message. The map is cut at [`MAX_OBJECTS`], which may leave out the background object, and a

@@ -429,7 +429,7 @@ fn map_ok(m: &ObjectMap) {
     for o in m.objects() {
         finite("object", &o.center);
         finite("object", &o.size);
-        finite("object", &[o.yaw, o.h_sopm, o.c_asso]);
+        finite("object", &[o.yaw, o.h_sopm, o.c_asso, o.support_height]);
         finite("l_best", &o.l_best);
         assert!(o.sopm_rows as usize * o.sopm_cols as usize <= MAX_SOPM_CELLS);
         assert_eq!(o.cells().len(), o.sopm_rows as usize * o.sopm_cols as usize);

@@ -214,6 +214,40 @@ impl CuboidScratch {
 }
 
 impl Box3 {
+    /// The smallest box of this one's yaw that holds this one and `other`'s corners (only
+    /// their footprints with `footprint_only`: z stays this box's).
+    pub fn grown_to_hold(&self, other: &Box3, footprint_only: bool) -> Box3 {
+        let (s, c) = self.yaw.sin_cos();
+        let to_local = |p: Vec3| {
+            let d = p - self.center;
+            Vec3::new(c * d.x + s * d.y, -s * d.x + c * d.y, d.z)
+        };
+        let h = self.size.max(Vec3::ZERO) * 0.5;
+        let (mut lo, mut hi) = (-h, h);
+        let (so, co) = other.yaw.sin_cos();
+        let ho = other.size.max(Vec3::ZERO) * 0.5;
+        for (x, y, z) in [-1.0f32, 1.0]
+            .iter()
+            .flat_map(|&x| [-1.0f32, 1.0].map(move |y| (x, y)))
+            .flat_map(|(x, y)| [-1.0f32, 1.0].map(move |z| (x, y, z)))
+        {
+            let (lx, ly) = (x * ho.x, y * ho.y);
+            let p = other.center + Vec3::new(co * lx - so * ly, so * lx + co * ly, z * ho.z);
+            let q = to_local(p);
+            lo = lo.min(q);
+            hi = hi.max(q);
+        }
+        if footprint_only {
+            (lo.z, hi.z) = (-h.z, h.z);
+        }
+        let mid = (lo + hi) * 0.5;
+        Box3 {
+            center: self.center + Vec3::new(c * mid.x - s * mid.y, s * mid.x + c * mid.y, mid.z),
+            size: hi - lo,
+            yaw: self.yaw,
+        }
+    }
+
     /// Volume, m³.
     pub fn volume(&self) -> f32 {
         self.size.x.max(0.0) * self.size.y.max(0.0) * self.size.z.max(0.0)
@@ -289,6 +323,26 @@ mod tests {
             size: Vec3::from(s),
             yaw,
         }
+    }
+
+    #[test]
+    fn a_box_grown_to_hold_another_keeps_its_yaw_and_covers_both() {
+        let a = bx([0.0, 0.0, 0.5], [1.0, 1.0, 1.0], 0.0);
+        // A 0.5 m cube at x = 1 turned 90°: its corners reach x 1.25, y ±0.25, z 0.25..0.75.
+        let b = bx([1.0, 0.0, 0.5], [0.5, 0.5, 0.5], std::f32::consts::FRAC_PI_2);
+        let g = a.grown_to_hold(&b, false);
+        assert!((g.center - Vec3::new(0.375, 0.0, 0.5)).length() < 1e-5, "{g:?}");
+        assert!((g.size - Vec3::new(1.75, 1.0, 1.0)).length() < 1e-5, "{g:?}");
+        assert_eq!(g.yaw, 0.0);
+        // A higher box: only the footprint grows with `footprint_only`.
+        let high = bx([0.0, 0.0, 2.0], [2.0, 0.5, 0.2], 0.0);
+        let f = a.grown_to_hold(&high, true);
+        assert!((f.center - Vec3::new(0.0, 0.0, 0.5)).length() < 1e-5, "{f:?}");
+        assert!((f.size - Vec3::new(2.0, 1.0, 1.0)).length() < 1e-5, "{f:?}");
+        // A box inside changes nothing.
+        let inner = bx([0.1, 0.1, 0.5], [0.2, 0.2, 0.2], 0.3);
+        let same = a.grown_to_hold(&inner, false);
+        assert!((same.center - a.center).length() < 1e-6 && (same.size - a.size).length() < 1e-6);
     }
 
     #[test]

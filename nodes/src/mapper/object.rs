@@ -60,6 +60,10 @@ pub struct MappedObject {
     pub cuboid: Box3,
     /// Supporting plane height (background objects).
     pub support_height: Option<f32>,
+    /// The cuboid a resumed object was published with ([`super::Mapper::resume_from`]): a
+    /// refit never makes the cuboid smaller than it. A voxel cloud only grows, so the
+    /// predecessor's would have held it; the resumed one holds only its 64 sample points.
+    pub restored: Option<Box3>,
     /// SOPM (foreground objects).
     pub sopm: Option<Sopm>,
     /// Associated detections.
@@ -119,6 +123,7 @@ impl MappedObject {
                 yaw: 0.0,
             },
             support_height: None,
+            restored: None,
             sopm: sopm.map(Sopm::new),
             observations: 0,
             first_seen_ns: now_ns,
@@ -247,6 +252,9 @@ impl MappedObject {
         if self.support_height.is_none() {
             self.support_height = other.support_height;
         }
+        if self.restored.is_none() {
+            self.restored = other.restored;
+        }
         if let (Some(s), Some(o)) = (self.sopm.as_mut(), other.sopm.as_ref()) {
             let step = std::f32::consts::TAU / s.params().cols as f32;
             let dyaw = crate::geom::wrap_angle(self.cuboid.yaw - other.cuboid.yaw);
@@ -284,6 +292,9 @@ impl MappedObject {
         };
         match fitted {
             Some(b) => {
+                let b = self
+                    .restored
+                    .map_or(b, |r| b.grown_to_hold(&r, self.background));
                 let dyaw = prev.map_or(0.0, |y| b.yaw - y);
                 self.cuboid = b;
                 dyaw

@@ -58,7 +58,7 @@ impl Mapper {
             m.observations = o.observations;
             m.c_asso = o.c_asso.clamp(0.0, 1.0);
             m.reserved = 0;
-            m.reserved_tail = 0;
+            m.support_height = o.support_height.filter(|_| o.background).unwrap_or(0.0);
             match &o.sopm {
                 Some(s) => {
                     let h = s.h_sopm();

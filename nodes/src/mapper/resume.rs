@@ -4,12 +4,22 @@
 //! is rebuilt from new frames:
 //! - each object's merged cloud is reduced to its published sample points (at most
 //!   [`MAX_OBJECT_POINTS`](shm_types::MAX_OBJECT_POINTS) voxels, each one point with its line
-//!   of sight), so the next refit uses those plus the new points;
+//!   of sight), so the next refit uses those plus the new points. The published cuboid is
+//!   kept as the smallest the refits may give (`MappedObject::restored`; a background
+//!   object's footprint only): fitted from 64 points plus one frame's partial view, a table's
+//!   footprint shrank, objects near its edge left its cluster and were no longer published,
+//!   and objects' bottoms rose off their table;
 //! - the SOPM keeps each cell's probability side (occupied / free / unknown) and observation
 //!   count ([`Sopm::restore`]);
 //! - class votes restart from the published class; existence from the `max_log_odds` cap
 //!   (only objects seen often enough are published); a background object's supporting plane
-//!   is where its cluster's objects stand (else its cuboid's top);
+//!   is its published `support_height`;
+//! - co-detection counts are not published, but every two restored objects were two objects
+//!   to the predecessor. Two foreground objects whose bounding circles (grown by
+//!   `merge_margin`) overlap are marked as detected together `distinct_after` times, so that
+//!   the refits of the next frames do not merge them. (A predecessor could still have merged
+//!   such a pair later if it had not been detected together yet; a restart keeps its
+//!   judgement instead.)
 //! - objects seen fewer than `min_observations` times were not published and are lost, as is
 //!   the exploration grid (rebuilt from depth).
 
@@ -53,13 +63,14 @@ impl Mapper {
                 size: Vec3::from_array(m.size),
                 yaw: m.yaw,
             };
+            o.restored = Some(o.cuboid);
             o.observations = m.observations;
             o.point_count = m.point_count;
             o.c_asso = m.c_asso;
             o.asso.c_asso = m.c_asso;
             o.existence = self.cfg.existence.max_log_odds;
-            if !fg {
-                o.support_height = Some(support_height(map, m));
+            if !fg && m.support_height != 0.0 {
+                o.support_height = Some(m.support_height);
             }
             if let Some(s) = o.sopm.as_mut()
                 && usize::from(m.sopm_rows) * usize::from(m.sopm_cols) == s.len()
@@ -69,6 +80,7 @@ impl Mapper {
             }
             self.objects.push(o);
         }
+        self.keep_restored_apart();
         self.next_id = self.objects.iter().map(|o| o.id + 1).max().unwrap_or(1);
         self.last_frame_seq = map.last_frame_seq;
         self.last_frame_stamp_ns = map.last_frame_stamp_ns;
@@ -77,19 +89,27 @@ impl Mapper {
     }
 }
 
-/// The supporting plane of background object `b`: the mean bottom of the foreground objects
-/// published in its cluster (so they stay in it), else the top of its cuboid.
-fn support_height(map: &ObjectMap, b: &shm_types::MapObject) -> f32 {
-    let bottoms: Vec<f32> = map
-        .objects()
-        .iter()
-        .filter(|o| !o.is_background() && o.cluster_id == b.id as i32)
-        .map(|o| o.center[2] - 0.5 * o.size[2])
-        .collect();
-    if bottoms.is_empty() {
-        b.center[2] + 0.5 * b.size[2]
-    } else {
-        bottoms.iter().sum::<f32>() / bottoms.len() as f32
+impl Mapper {
+    /// Mark every two restored foreground objects near each other as detected together
+    /// `distinct_after` times (see the module documentation).
+    fn keep_restored_apart(&mut self) {
+        let (k, margin) = (self.cfg.distinct_after, self.cfg.merge_margin);
+        let radius = |b: &Box3| 0.5 * b.size.truncate().length() + margin;
+        for i in 0..self.objects.len() {
+            for j in i + 1..self.objects.len() {
+                let (a, b) = (&self.objects[i], &self.objects[j]);
+                let gap = a
+                    .cuboid
+                    .center
+                    .truncate()
+                    .distance(b.cuboid.center.truncate());
+                if !a.background && !b.background && gap <= radius(&a.cuboid) + radius(&b.cuboid) {
+                    let (a, b) = (self.objects[i].id, self.objects[j].id);
+                    self.objects[i].add_co_seen(b, k);
+                    self.objects[j].add_co_seen(a, k);
+                }
+            }
+        }
     }
 }
 
@@ -130,6 +150,7 @@ mod tests {
         (table.center, table.size, table.yaw) = ([1.0, 0.0, 0.375], [1.2, 0.8, 0.75], 0.1);
         (table.observations, table.point_count, table.c_asso) = (30, 4000, 0.9);
         (table.cluster_id, table.sample_count) = (4, MAX_OBJECT_POINTS as u16);
+        table.support_height = 0.75;
         for k in 0..MAX_OBJECT_POINTS {
             let a = k as f32 / MAX_OBJECT_POINTS as f32 * std::f32::consts::TAU;
             table.points[k] = [1.0 + 0.6 * a.cos(), 0.4 * a.sin(), 0.75];

@@ -179,7 +179,7 @@ pub(super) fn types() -> Vec<TypeLayout> {
             sopm_obs: "count",
             points: "m",
             point_los: "1",
-            reserved_tail: "pad",
+            support_height: "m",
         }),
         layout!(ObjectMap {
             header: "struct",
