@@ -7,13 +7,13 @@
 //! its edge left its cluster and were not published, and neighbours kept apart by
 //! co-detection were merged.
 
+mod desk_tour;
+
+use glam::Vec3;
 use nodes::config::Config;
 use nodes::mapper::Mapper;
 use nodes::sim::{Scene, Sim};
-use shm_types::{
-    DepthFrame, Detections, NavGoal, NeckGoal, ObjectMap, RobotState, boxed_zeroed, class_name,
-    nav_status,
-};
+use shm_types::{ObjectMap, boxed_zeroed, class_name};
 
 const EVERY: u32 = 15;
 const WINDOW: u32 = 10;
@@ -25,19 +25,6 @@ fn a_resumed_mapper_keeps_every_published_object_through_the_next_second() {
     let desk = scene.objects.iter().find(|o| o.background).unwrap().center;
     let mut sim = Sim::new(scene.clone(), &cfg, 7).unwrap();
     let mut mapper = Mapper::new(&cfg.mapper, &cfg.camera.camera()).unwrap();
-    let (mut frame, mut dets) = (boxed_zeroed::<DepthFrame>(), boxed_zeroed::<Detections>());
-    let mut state = RobotState::default();
-    // Twelve waypoints on a circle around the desk, the neck on the desk centre.
-    let (radius, n) = (1.7f32, 12);
-    let waypoints: Vec<[f32; 3]> = (0..=n)
-        .map(|k| {
-            let a = std::f32::consts::TAU * k as f32 / n as f32;
-            let (x, y) = (desk.x + radius * a.cos(), desk.y + radius * a.sin());
-            [x, y, a + std::f32::consts::PI]
-        })
-        .collect();
-    let (dt, frame_every) = (20_000_000u64, 5u64);
-    let mut goal = 0usize;
     let (mut checkpoint, mut ours, mut theirs) = (
         boxed_zeroed::<ObjectMap>(),
         boxed_zeroed::<ObjectMap>(),
@@ -45,80 +32,45 @@ fn a_resumed_mapper_keeps_every_published_object_through_the_next_second() {
     );
     let mut resumed: Option<(Mapper, u32)> = None;
     let (mut frames, mut checked, mut restored, mut worst_shift) = (0u32, 0u32, 0usize, 0.0f32);
-    let mut shifts = Vec::new();
-    let mut own = Vec::new();
-    let mut lost = Vec::new();
-    for step in 0..60_000u64 {
-        sim.robot_state(&mut state);
-        let current = goal as u64 + 1;
-        if state.nav_goal_id != current
-            || matches!(
-                state.nav_status,
-                nav_status::REACHED | nav_status::UNREACHABLE
-            )
-        {
-            if state.nav_goal_id == current {
-                goal += 1;
-                if goal == waypoints.len() {
-                    break;
-                }
-            }
-            let g = NavGoal {
-                goal_id: goal as u64 + 1,
-                pose: waypoints[goal],
-                ..Default::default()
-            };
-            let _ = sim.set_nav_goal(&g);
-        }
-        let [x, y, yaw] = state.base_pose;
-        sim.set_neck_goal(&NeckGoal {
-            yaw: (desk.y - y).atan2(desk.x - x) - yaw,
-            pitch: cfg.camera.mount.pitch(),
-            ..Default::default()
-        });
-        if step % frame_every == 0 {
-            sim.render(&mut frame, &mut dets, sim.time_ns());
-            sim.robot_state(&mut state);
-            mapper.integrate(&frame, &dets, &state).unwrap();
-            frames += 1;
-            if let Some((r, at)) = resumed.as_mut() {
-                r.integrate(&frame, &dets, &state).unwrap();
-                r.write_map(&mut ours, sim.time_ns());
-                mapper.write_map(&mut theirs, sim.time_ns());
-                checked += 1;
-                for o in checkpoint.objects() {
-                    let Some(t) = theirs.objects().iter().find(|t| t.id == o.id) else {
-                        continue;
-                    };
-                    match ours.objects().iter().find(|u| u.id == o.id) {
-                        Some(u) => {
-                            let d = glam::Vec3::from(u.center) - glam::Vec3::from(t.center);
-                            worst_shift = worst_shift.max(d.length());
-                            shifts.push(d.length());
-                            let moved = glam::Vec3::from(o.center) - glam::Vec3::from(t.center);
-                            own.push(moved.length());
-                        }
-                        None => lost.push(format!(
-                            "{} {} (resumed at frame {at}, +{})",
-                            class_name(o.class_id),
-                            o.id,
-                            frames - *at
-                        )),
+    let (mut shifts, mut own, mut lost) = (Vec::new(), Vec::new(), Vec::new());
+    desk_tour::circle_desk(&mut sim, &cfg, desk, |frame, dets, state, now| {
+        mapper.integrate(frame, dets, state).unwrap();
+        frames += 1;
+        if let Some((r, at)) = resumed.as_mut() {
+            r.integrate(frame, dets, state).unwrap();
+            r.write_map(&mut ours, now);
+            mapper.write_map(&mut theirs, now);
+            checked += 1;
+            for o in checkpoint.objects() {
+                let Some(t) = theirs.objects().iter().find(|t| t.id == o.id) else {
+                    continue;
+                };
+                match ours.objects().iter().find(|u| u.id == o.id) {
+                    Some(u) => {
+                        let d = Vec3::from(u.center) - Vec3::from(t.center);
+                        worst_shift = worst_shift.max(d.length());
+                        shifts.push(d.length());
+                        own.push((Vec3::from(o.center) - Vec3::from(t.center)).length());
                     }
-                }
-                if frames - *at == WINDOW {
-                    resumed = None;
+                    None => lost.push(format!(
+                        "{} {} (resumed at frame {at}, +{})",
+                        class_name(o.class_id),
+                        o.id,
+                        frames - *at
+                    )),
                 }
             }
-            if frames % EVERY == 0 {
-                mapper.write_map(&mut checkpoint, sim.time_ns());
-                let mut r = Mapper::new(&cfg.mapper, &cfg.camera.camera()).unwrap();
-                restored += r.resume_from(&checkpoint);
-                resumed = Some((r, frames));
+            if frames - *at == WINDOW {
+                resumed = None;
             }
         }
-        sim.step(dt);
-    }
+        if frames % EVERY == 0 {
+            mapper.write_map(&mut checkpoint, now);
+            let mut r = Mapper::new(&cfg.mapper, &cfg.camera.camera()).unwrap();
+            restored += r.resume_from(&checkpoint);
+            resumed = Some((r, frames));
+        }
+    });
     println!(
         "{frames} frames, {} resumes ({restored} objects restored), {checked} frames compared; \
          largest centre difference from the running mapper {worst_shift:.3} m",

@@ -3,13 +3,12 @@
 //! 5 cm and no duplicate remains, with instance masks and with box-only detections (the label
 //! image zeroed, `masks = BOXES`, as a YOLO-class detector gives). No planner is involved.
 
+mod desk_tour;
+
 use nodes::config::Config;
 use nodes::mapper::Mapper;
 use nodes::sim::{Scene, Sim};
-use shm_types::{
-    DepthFrame, Detections, NavGoal, NeckGoal, ObjectMap, RobotState, boxed_zeroed, class_name,
-    nav_status,
-};
+use shm_types::{ObjectMap, boxed_zeroed, class_name};
 
 #[test]
 fn circling_the_desk_maps_every_object_once_within_5_cm() {
@@ -29,76 +28,19 @@ fn circle_desk(boxes: bool) {
     let desk = scene.objects.iter().find(|o| o.background).unwrap().center;
     let mut sim = Sim::new(scene.clone(), &cfg, 7).unwrap();
     let mut mapper = Mapper::new(&cfg.mapper, &cfg.camera.camera()).unwrap();
-    let (mut frame, mut dets) = (boxed_zeroed::<DepthFrame>(), boxed_zeroed::<Detections>());
-    let mut state = RobotState::default();
-
-    // Twelve waypoints on a circle around the desk, visited in order.
-    let (radius, n) = (1.7f32, 12);
-    let waypoints: Vec<[f32; 3]> = (0..=n)
-        .map(|k| {
-            let a = std::f32::consts::TAU * k as f32 / n as f32;
-            [
-                desk.x + radius * a.cos(),
-                desk.y + radius * a.sin(),
-                a + std::f32::consts::PI,
-            ]
-        })
-        .collect();
-    let (dt, frame_every) = (20_000_000u64, 5u64);
-    let mut goal = 0usize;
-    let mut reached = 0;
-    for step in 0..60_000u64 {
-        sim.robot_state(&mut state);
-        let current = goal as u64 + 1;
-        if state.nav_goal_id != current
-            || matches!(
-                state.nav_status,
-                nav_status::REACHED | nav_status::UNREACHABLE
-            )
-        {
-            if state.nav_goal_id == current {
-                reached += usize::from(state.nav_status == nav_status::REACHED);
-                goal += 1;
-                if goal == waypoints.len() {
-                    break;
-                }
-            }
-            let g = NavGoal {
-                goal_id: goal as u64 + 1,
-                pose: waypoints[goal],
-                ..Default::default()
-            };
-            let _ = sim.set_nav_goal(&g);
+    let reached = desk_tour::circle_desk(&mut sim, &cfg, desk, |frame, dets, state, _| {
+        if boxes {
+            let n = (dets.width * dets.height) as usize;
+            dets.labels[..n].fill(0);
+            dets.masks = shm_types::mask_mode::BOXES;
+            let count = dets.count as usize;
+            dets.items[..count]
+                .iter_mut()
+                .for_each(|d| d.mask_pixels = 0);
         }
-        // Neck on the desk centre (from the estimated pose: no ground truth for the robot).
-        let [x, y, yaw] = state.base_pose;
-        let neck_yaw = (desk.y - y).atan2(desk.x - x) - yaw;
-        sim.set_neck_goal(&NeckGoal {
-            yaw: neck_yaw,
-            pitch: cfg.camera.mount.pitch(),
-            ..Default::default()
-        });
-        if step % frame_every == 0 {
-            sim.render(&mut frame, &mut dets, sim.time_ns());
-            if boxes {
-                let n = (dets.width * dets.height) as usize;
-                dets.labels[..n].fill(0);
-                dets.masks = shm_types::mask_mode::BOXES;
-                let count = dets.count as usize;
-                dets.items[..count]
-                    .iter_mut()
-                    .for_each(|d| d.mask_pixels = 0);
-            }
-            sim.robot_state(&mut state);
-            mapper.integrate(&frame, &dets, &state).unwrap();
-        }
-        sim.step(dt);
-    }
-    assert!(
-        reached >= 10,
-        "only {reached} of {} waypoints reached",
-        waypoints.len()
-    );
+        mapper.integrate(frame, dets, state).unwrap();
+    });
+    assert!(reached >= 10, "only {reached} of 13 waypoints reached");
 
     let mut map = boxed_zeroed::<ObjectMap>();
     mapper.write_map(&mut map, sim.time_ns());

@@ -300,7 +300,12 @@ fn object_map_rules() {
     rejects(m.validate(), "ObjectMap", "objects[1].point_los", "2");
     let mut m = map();
     m.objects[0].support_height = f32::NAN;
-    rejects(m.validate(), "ObjectMap", "objects[0].support_height", "NaN");
+    rejects(
+        m.validate(),
+        "ObjectMap",
+        "objects[0].support_height",
+        "NaN",
+    );
     // Past sample_count: not part of the message.
     let mut m = map();
     m.objects[1].points[2] = [f32::NAN; 3];

@@ -329,15 +329,28 @@ mod tests {
     fn a_box_grown_to_hold_another_keeps_its_yaw_and_covers_both() {
         let a = bx([0.0, 0.0, 0.5], [1.0, 1.0, 1.0], 0.0);
         // A 0.5 m cube at x = 1 turned 90°: its corners reach x 1.25, y ±0.25, z 0.25..0.75.
-        let b = bx([1.0, 0.0, 0.5], [0.5, 0.5, 0.5], std::f32::consts::FRAC_PI_2);
+        let b = bx(
+            [1.0, 0.0, 0.5],
+            [0.5, 0.5, 0.5],
+            std::f32::consts::FRAC_PI_2,
+        );
         let g = a.grown_to_hold(&b, false);
-        assert!((g.center - Vec3::new(0.375, 0.0, 0.5)).length() < 1e-5, "{g:?}");
-        assert!((g.size - Vec3::new(1.75, 1.0, 1.0)).length() < 1e-5, "{g:?}");
+        assert!(
+            (g.center - Vec3::new(0.375, 0.0, 0.5)).length() < 1e-5,
+            "{g:?}"
+        );
+        assert!(
+            (g.size - Vec3::new(1.75, 1.0, 1.0)).length() < 1e-5,
+            "{g:?}"
+        );
         assert_eq!(g.yaw, 0.0);
         // A higher box: only the footprint grows with `footprint_only`.
         let high = bx([0.0, 0.0, 2.0], [2.0, 0.5, 0.2], 0.0);
         let f = a.grown_to_hold(&high, true);
-        assert!((f.center - Vec3::new(0.0, 0.0, 0.5)).length() < 1e-5, "{f:?}");
+        assert!(
+            (f.center - Vec3::new(0.0, 0.0, 0.5)).length() < 1e-5,
+            "{f:?}"
+        );
         assert!((f.size - Vec3::new(2.0, 1.0, 1.0)).length() < 1e-5, "{f:?}");
         // A box inside changes nothing.
         let inner = bx([0.1, 0.1, 0.5], [0.2, 0.2, 0.2], 0.3);
