@@ -13,8 +13,8 @@
 //!   upper points; the footprint comes from the points on that plane, and the cuboid extends from
 //!   the plane down to the floor (z = 0).
 
-use crate::geom::convex_hull;
-use glam::{Vec2, Vec3};
+use crate::geom::{Cuboid, convex_hull};
+use glam::{Mat3, Vec2, Vec3};
 
 /// An estimated upright cuboid.
 #[derive(Debug, Clone, Copy, PartialEq)]
@@ -217,32 +217,25 @@ impl Box3 {
     /// The smallest box of this one's yaw that holds this one and `other`'s corners (only
     /// their footprints with `footprint_only`: z stays this box's).
     pub fn grown_to_hold(&self, other: &Box3, footprint_only: bool) -> Box3 {
-        let (s, c) = self.yaw.sin_cos();
-        let to_local = |p: Vec3| {
-            let d = p - self.center;
-            Vec3::new(c * d.x + s * d.y, -s * d.x + c * d.y, d.z)
-        };
+        let to_local = Mat3::from_rotation_z(-self.yaw);
         let h = self.size.max(Vec3::ZERO) * 0.5;
         let (mut lo, mut hi) = (-h, h);
-        let (so, co) = other.yaw.sin_cos();
-        let ho = other.size.max(Vec3::ZERO) * 0.5;
-        for (x, y, z) in [-1.0f32, 1.0]
-            .iter()
-            .flat_map(|&x| [-1.0f32, 1.0].map(move |y| (x, y)))
-            .flat_map(|(x, y)| [-1.0f32, 1.0].map(move |z| (x, y, z)))
-        {
-            let (lx, ly) = (x * ho.x, y * ho.y);
-            let p = other.center + Vec3::new(co * lx - so * ly, so * lx + co * ly, z * ho.z);
-            let q = to_local(p);
+        let corners = Cuboid {
+            center: other.center,
+            size: other.size.max(Vec3::ZERO),
+            yaw: other.yaw,
+        }
+        .corners();
+        for p in corners {
+            let q = to_local * (p - self.center);
             lo = lo.min(q);
             hi = hi.max(q);
         }
         if footprint_only {
             (lo.z, hi.z) = (-h.z, h.z);
         }
-        let mid = (lo + hi) * 0.5;
         Box3 {
-            center: self.center + Vec3::new(c * mid.x - s * mid.y, s * mid.x + c * mid.y, mid.z),
+            center: self.center + Mat3::from_rotation_z(self.yaw) * ((lo + hi) * 0.5),
             size: hi - lo,
             yaw: self.yaw,
         }

@@ -87,9 +87,7 @@ impl Mapper {
         self.last_sim_time_ns = map.header.sim_time_ns;
         self.objects.len()
     }
-}
 
-impl Mapper {
     /// Mark every two restored foreground objects near each other as detected together
     /// `distinct_after` times (see the module documentation).
     fn keep_restored_apart(&mut self) {
