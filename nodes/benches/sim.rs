@@ -22,6 +22,9 @@
 //! (× 0.56), depth_only_1thread 7.4 / 7.7 → 5.2 / 4.1 ms (× 0.60). `SIM_CPU_FRAMES` mode, 1
 //! thread, minimum CPU time per frame: 5.6–5.7 → 4.0 ms. Profile of one thread now: depth
 //! readings 25 %, boxes 17 %, artefacts 16 %, PCG 11 %, room 9 %, detector 3 %.
+//!
+//! Quiet machine (load ≈ 1.1–1.4, nothing else running), 2026-12-02, two runs: sim_render_full
+//! 3.85 / 3.45 ms (target ≤ 4 ms), depth_only 2.69 / 2.98 ms, depth_only_1thread 4.05 / 5.03 ms.
 
 use criterion::{Criterion, Throughput, criterion_group};
 use nodes::config::Config;
