@@ -77,8 +77,8 @@ fn multi_process_run_terminates_and_matches_lockstep_quality() {
         runtime::ports::list_services(&ns).unwrap().is_empty(),
         "services left behind"
     );
-    // The live trace replays against its recorded maps to the stated tolerance: every map is
-    // compared, and the first ones (before any race of the state with a frame) are within it.
+    // The live trace replays exactly: following the maps' frame receipts, a fresh mapper
+    // reproduces every recorded map bit for bit.
     let trace = live.join("trace.mcap");
     let check = Command::new(env!("CARGO_BIN_EXE_vpsom"))
         .args(["replay", "--config", ideal, "--check"])
@@ -86,7 +86,7 @@ fn multi_process_run_terminates_and_matches_lockstep_quality() {
         .output()
         .unwrap();
     let text = String::from_utf8_lossy(&check.stdout);
-    let (within, maps): (u64, u64) = text
+    let (identical, maps): (u64, u64) = text
         .split("live trace: ")
         .nth(1)
         .and_then(|s| {
@@ -100,7 +100,20 @@ fn multi_process_run_terminates_and_matches_lockstep_quality() {
             )
         });
     assert_eq!(maps, info.count("/map/objects"), "{text}");
-    assert!(within >= 1, "{text}");
+    let dropped: u64 = text
+        .split(" messages dropped by the recorder")
+        .next()
+        .and_then(|s| s.rsplit(' ').next()?.parse().ok())
+        .unwrap_or_else(|| panic!("no drop count:\n{text}"));
+    if dropped == 0 {
+        assert_eq!(identical, maps, "{text}");
+        assert!(check.status.success(), "{text}");
+    } else {
+        // A recorder that lost messages under load: the maps after a lost input differ.
+        eprintln!(
+            "SKIPPED the exactness of the live check: the recorder dropped {dropped} messages\n{text}"
+        );
+    }
 
     vpsom(&[
         "run",

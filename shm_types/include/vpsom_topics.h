@@ -57,6 +57,7 @@
 #define VPSOM_TYPE_NAME_DETECTIONS         "vpsom::Detections"
 #define VPSOM_TYPE_NAME_ROBOT_STATE        "vpsom::RobotState"
 #define VPSOM_TYPE_NAME_MAP_OBJECT         "vpsom::MapObject"
+#define VPSOM_TYPE_NAME_FRAME_RECEIPT      "vpsom::FrameReceipt"
 #define VPSOM_TYPE_NAME_OBJECT_MAP         "vpsom::ObjectMap"
 #define VPSOM_TYPE_NAME_OCCUPANCY_GRID     "vpsom::OccupancyGrid"
 #define VPSOM_TYPE_NAME_NAV_GOAL           "vpsom::NavGoal"
@@ -79,6 +80,7 @@
 #define VPSOM_MAX_OBJECT_POINTS            64
 #define VPSOM_MAX_GRID_CELLS               65536
 #define VPSOM_MAX_CANDIDATES               64
+#define VPSOM_MAX_FRAME_RECEIPTS           16
 #define VPSOM_THREAD_NAME_LEN              32
 #define VPSOM_MAX_HEALTH_INPUTS            16
 #define VPSOM_HEALTH_TOPIC_LEN             32
@@ -110,6 +112,10 @@
 #define VPSOM_PLANNER_STATE_RUNNING        0
 #define VPSOM_PLANNER_STATE_TERMINATED     1
 #define VPSOM_PLANNER_STATE_NO_CANDIDATES  2
+#define VPSOM_FRAME_OUTCOME_INTEGRATED     0
+#define VPSOM_FRAME_OUTCOME_SKIPPED_LOST   1
+#define VPSOM_FRAME_OUTCOME_NO_DETECTIONS  2
+#define VPSOM_FRAME_OUTCOME_REFUSED        3
 /* COCO class names by class id: static const char *names[] = VPSOM_COCO_CLASSES; */
 #define VPSOM_COCO_CLASSES { \
     "person", "bicycle", "car", "motorcycle", "airplane", "bus", \
@@ -335,7 +341,24 @@ VPSOM_STATIC_ASSERT(offsetof(vpsom_MapObject, points) == 3972, "vpsom_MapObject.
 VPSOM_STATIC_ASSERT(offsetof(vpsom_MapObject, point_los) == 4740, "vpsom_MapObject.point_los: offset");
 VPSOM_STATIC_ASSERT(offsetof(vpsom_MapObject, support_height) == 5508, "vpsom_MapObject.support_height: offset");
 
-/* vpsom::ObjectMap: 705600 bytes, alignment 8 */
+/* vpsom::FrameReceipt: 24 bytes, alignment 8 */
+typedef struct vpsom_FrameReceipt {
+#ifdef __cplusplus
+    static constexpr const char *IOX2_TYPE_NAME = "vpsom::FrameReceipt";
+#endif
+    uint64_t frame_seq;                      /* offset 0, id */
+    uint64_t state_seq;                      /* offset 8, id */
+    uint32_t outcome;                        /* offset 16, enum frame_outcome */
+    uint32_t reserved;                       /* offset 20, pad */
+} vpsom_FrameReceipt;
+VPSOM_STATIC_ASSERT(sizeof(vpsom_FrameReceipt) == 24, "vpsom_FrameReceipt: size");
+VPSOM_STATIC_ASSERT(VPSOM_ALIGNOF(vpsom_FrameReceipt) == 8, "vpsom_FrameReceipt: alignment");
+VPSOM_STATIC_ASSERT(offsetof(vpsom_FrameReceipt, frame_seq) == 0, "vpsom_FrameReceipt.frame_seq: offset");
+VPSOM_STATIC_ASSERT(offsetof(vpsom_FrameReceipt, state_seq) == 8, "vpsom_FrameReceipt.state_seq: offset");
+VPSOM_STATIC_ASSERT(offsetof(vpsom_FrameReceipt, outcome) == 16, "vpsom_FrameReceipt.outcome: offset");
+VPSOM_STATIC_ASSERT(offsetof(vpsom_FrameReceipt, reserved) == 20, "vpsom_FrameReceipt.reserved: offset");
+
+/* vpsom::ObjectMap: 705984 bytes, alignment 8 */
 typedef struct vpsom_ObjectMap {
 #ifdef __cplusplus
     static constexpr const char *IOX2_TYPE_NAME = "vpsom::ObjectMap";
@@ -348,10 +371,11 @@ typedef struct vpsom_ObjectMap {
     uint32_t frames_integrated;              /* offset 48, count */
     uint32_t frames_rejected;                /* offset 52, count */
     uint32_t frames_unmatched;               /* offset 56, count */
-    uint32_t reserved;                       /* offset 60, pad */
+    uint32_t receipt_count;                  /* offset 60, count */
     vpsom_MapObject objects[128];            /* offset 64, struct */
+    vpsom_FrameReceipt receipts[16];         /* offset 705600, struct */
 } vpsom_ObjectMap;
-VPSOM_STATIC_ASSERT(sizeof(vpsom_ObjectMap) == 705600, "vpsom_ObjectMap: size");
+VPSOM_STATIC_ASSERT(sizeof(vpsom_ObjectMap) == 705984, "vpsom_ObjectMap: size");
 VPSOM_STATIC_ASSERT(VPSOM_ALIGNOF(vpsom_ObjectMap) == 8, "vpsom_ObjectMap: alignment");
 VPSOM_STATIC_ASSERT(offsetof(vpsom_ObjectMap, header) == 0, "vpsom_ObjectMap.header: offset");
 VPSOM_STATIC_ASSERT(offsetof(vpsom_ObjectMap, last_frame_seq) == 24, "vpsom_ObjectMap.last_frame_seq: offset");
@@ -361,8 +385,9 @@ VPSOM_STATIC_ASSERT(offsetof(vpsom_ObjectMap, eps_sopm) == 44, "vpsom_ObjectMap.
 VPSOM_STATIC_ASSERT(offsetof(vpsom_ObjectMap, frames_integrated) == 48, "vpsom_ObjectMap.frames_integrated: offset");
 VPSOM_STATIC_ASSERT(offsetof(vpsom_ObjectMap, frames_rejected) == 52, "vpsom_ObjectMap.frames_rejected: offset");
 VPSOM_STATIC_ASSERT(offsetof(vpsom_ObjectMap, frames_unmatched) == 56, "vpsom_ObjectMap.frames_unmatched: offset");
-VPSOM_STATIC_ASSERT(offsetof(vpsom_ObjectMap, reserved) == 60, "vpsom_ObjectMap.reserved: offset");
+VPSOM_STATIC_ASSERT(offsetof(vpsom_ObjectMap, receipt_count) == 60, "vpsom_ObjectMap.receipt_count: offset");
 VPSOM_STATIC_ASSERT(offsetof(vpsom_ObjectMap, objects) == 64, "vpsom_ObjectMap.objects: offset");
+VPSOM_STATIC_ASSERT(offsetof(vpsom_ObjectMap, receipts) == 705600, "vpsom_ObjectMap.receipts: offset");
 
 /* vpsom::OccupancyGrid: 65584 bytes, alignment 8 */
 typedef struct vpsom_OccupancyGrid {

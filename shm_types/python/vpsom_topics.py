@@ -45,6 +45,7 @@ MAX_SOPM_CELLS = 648
 MAX_OBJECT_POINTS = 64
 MAX_GRID_CELLS = 65536
 MAX_CANDIDATES = 64
+MAX_FRAME_RECEIPTS = 16
 THREAD_NAME_LEN = 32
 MAX_HEALTH_INPUTS = 16
 HEALTH_TOPIC_LEN = 32
@@ -76,6 +77,10 @@ DECISION_KIND_LBV = 1
 PLANNER_STATE_RUNNING = 0
 PLANNER_STATE_TERMINATED = 1
 PLANNER_STATE_NO_CANDIDATES = 2
+FRAME_OUTCOME_INTEGRATED = 0
+FRAME_OUTCOME_SKIPPED_LOST = 1
+FRAME_OUTCOME_NO_DETECTIONS = 2
+FRAME_OUTCOME_REFUSED = 3
 
 # COCO class names by class id.
 COCO_CLASSES = (
@@ -259,8 +264,24 @@ class MapObject(ctypes.Structure):
         return "vpsom::MapObject"
 
 
+class FrameReceipt(ctypes.Structure):
+    """vpsom::FrameReceipt: 24 bytes, alignment 8."""
+
+    _fields_ = [
+        ("frame_seq", ctypes.c_uint64),  # offset 0, id
+        ("state_seq", ctypes.c_uint64),  # offset 8, id
+        ("outcome", ctypes.c_uint32),  # offset 16, enum frame_outcome
+        ("reserved", ctypes.c_uint32),  # offset 20, pad
+    ]
+
+    @staticmethod
+    def type_name() -> str:
+        """The iceoryx2 payload type name (used by `publish_subscribe`)."""
+        return "vpsom::FrameReceipt"
+
+
 class ObjectMap(ctypes.Structure):
-    """vpsom::ObjectMap: 705600 bytes, alignment 8."""
+    """vpsom::ObjectMap: 705984 bytes, alignment 8."""
 
     _fields_ = [
         ("header", Header),  # offset 0, struct
@@ -271,8 +292,9 @@ class ObjectMap(ctypes.Structure):
         ("frames_integrated", ctypes.c_uint32),  # offset 48, count
         ("frames_rejected", ctypes.c_uint32),  # offset 52, count
         ("frames_unmatched", ctypes.c_uint32),  # offset 56, count
-        ("reserved", ctypes.c_uint32),  # offset 60, pad
+        ("receipt_count", ctypes.c_uint32),  # offset 60, count
         ("objects", MapObject * 128),  # offset 64, struct
+        ("receipts", FrameReceipt * 16),  # offset 705600, struct
     ]
 
     @staticmethod
@@ -586,7 +608,13 @@ LAYOUT = {
         "point_los": {"offset": 4740, "size": 768, "type": "f32", "dims": [64, 3], "unit": "1"},
         "support_height": {"offset": 5508, "size": 4, "type": "f32", "dims": [], "unit": "m"},
     }},
-    "ObjectMap": {"type_name": "vpsom::ObjectMap", "size": 705600, "align": 8, "fields": {
+    "FrameReceipt": {"type_name": "vpsom::FrameReceipt", "size": 24, "align": 8, "fields": {
+        "frame_seq": {"offset": 0, "size": 8, "type": "u64", "dims": [], "unit": "id"},
+        "state_seq": {"offset": 8, "size": 8, "type": "u64", "dims": [], "unit": "id"},
+        "outcome": {"offset": 16, "size": 4, "type": "u32", "dims": [], "unit": "enum frame_outcome"},
+        "reserved": {"offset": 20, "size": 4, "type": "u32", "dims": [], "unit": "pad"},
+    }},
+    "ObjectMap": {"type_name": "vpsom::ObjectMap", "size": 705984, "align": 8, "fields": {
         "header": {"offset": 0, "size": 24, "type": "Header", "dims": [], "unit": "struct"},
         "last_frame_seq": {"offset": 24, "size": 8, "type": "u64", "dims": [], "unit": "id"},
         "last_frame_stamp_ns": {"offset": 32, "size": 8, "type": "u64", "dims": [], "unit": "ns"},
@@ -595,8 +623,9 @@ LAYOUT = {
         "frames_integrated": {"offset": 48, "size": 4, "type": "u32", "dims": [], "unit": "count"},
         "frames_rejected": {"offset": 52, "size": 4, "type": "u32", "dims": [], "unit": "count"},
         "frames_unmatched": {"offset": 56, "size": 4, "type": "u32", "dims": [], "unit": "count"},
-        "reserved": {"offset": 60, "size": 4, "type": "u32", "dims": [], "unit": "pad"},
+        "receipt_count": {"offset": 60, "size": 4, "type": "u32", "dims": [], "unit": "count"},
         "objects": {"offset": 64, "size": 705536, "type": "MapObject", "dims": [128], "unit": "struct"},
+        "receipts": {"offset": 705600, "size": 384, "type": "FrameReceipt", "dims": [16], "unit": "struct"},
     }},
     "OccupancyGrid": {"type_name": "vpsom::OccupancyGrid", "size": 65584, "align": 8, "fields": {
         "header": {"offset": 0, "size": 24, "type": "Header", "dims": [], "unit": "struct"},

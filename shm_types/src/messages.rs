@@ -30,6 +30,9 @@ pub const MAX_OBJECT_POINTS: usize = 64;
 pub const MAX_GRID_CELLS: usize = 256 * 256;
 /// Candidates per [`PlannerDecision`].
 pub const MAX_CANDIDATES: usize = 64;
+/// Frame receipts per [`ObjectMap`]: the depth frames a map consumed since the previous one
+/// (a host publishes a map at least every this many frames).
+pub const MAX_FRAME_RECEIPTS: usize = 16;
 /// Bytes of a thread name in [`DeadlineEvent`].
 pub const THREAD_NAME_LEN: usize = 32;
 
@@ -631,16 +634,54 @@ pub struct ObjectMap {
     /// Depth frames skipped so far because no matching detections arrived (or their size or
     /// sequence number did not match the frame).
     pub frames_unmatched: u32,
-    /// Zero (keeps `objects` 8-byte aligned without implicit padding).
-    pub reserved: u32,
+    /// Depth frames the mapper consumed since the previous map (integrated, skipped or
+    /// refused). `receipts` holds the newest `min(receipt_count, MAX_FRAME_RECEIPTS)` of them;
+    /// a count above [`MAX_FRAME_RECEIPTS`] says that receipts were lost.
+    pub receipt_count: u32,
     /// The objects, first `count` valid.
     pub objects: [MapObject; MAX_OBJECTS],
+    /// What the mapper did with each frame it consumed since the previous map, oldest first
+    /// (see `receipt_count`): which inputs this map consumed, so that a replay can follow them.
+    pub receipts: [FrameReceipt; MAX_FRAME_RECEIPTS],
+}
+
+/// What the mapper did with one depth frame: which frame, with which robot state, and what came
+/// of it ([`frame_outcome`]).
+#[derive(Debug, Clone, Copy, Default, PartialEq, Eq, ZeroCopySend, bytemuck::Zeroable)]
+#[repr(C)]
+#[type_name("vpsom::FrameReceipt")]
+pub struct FrameReceipt {
+    /// `header.seq` of the [`DepthFrame`].
+    pub frame_seq: u64,
+    /// `header.seq` of the [`RobotState`] the mapper held for it (0: none received yet).
+    pub state_seq: u64,
+    /// One of [`frame_outcome`].
+    pub outcome: u32,
+    /// Padding, always 0.
+    pub reserved: u32,
+}
+
+/// Values of [`FrameReceipt::outcome`].
+pub mod frame_outcome {
+    /// Integrated into the map.
+    pub const INTEGRATED: u32 = 0;
+    /// Skipped: the robot state said localization was lost.
+    pub const SKIPPED_LOST: u32 = 1;
+    /// Skipped: no matching detections arrived.
+    pub const NO_DETECTIONS: u32 = 2;
+    /// Refused: the frame or its detections failed validation, or they disagree (size, seq).
+    pub const REFUSED: u32 = 3;
 }
 
 impl ObjectMap {
     /// The valid objects.
     pub fn objects(&self) -> &[MapObject] {
         &self.objects[..(self.count as usize).min(MAX_OBJECTS)]
+    }
+
+    /// The valid receipts, oldest first.
+    pub fn receipts(&self) -> &[FrameReceipt] {
+        &self.receipts[..(self.receipt_count as usize).min(MAX_FRAME_RECEIPTS)]
     }
 
     /// Make `self` a copy of `src` (e.g. into a reusable buffer): the header fields and the used
@@ -657,6 +698,8 @@ impl ObjectMap {
         self.frames_unmatched = src.frames_unmatched;
         self.count = objects.len() as u32;
         self.objects[..objects.len()].copy_from_slice(objects);
+        self.receipt_count = src.receipt_count;
+        self.receipts = src.receipts;
     }
 }
 
@@ -668,7 +711,8 @@ impl ObjectMap {
 /// [`sopm_shape`]; `sopm_rows × sopm_cols` ≤ [`MAX_SOPM_CELLS`], both zero (no SOPM yet) or both
 /// non-zero; every used `sopm_prob` in `[0, 1]`; `sample_count` ≤ [`MAX_OBJECT_POINTS`]; each
 /// used point within [`MAX_WORLD_COORD_M`] and each component of its `point_los` within
-/// `[-1, 1]` (1e-3 slack); `support_height` within [`MAX_WORLD_COORD_M`].
+/// `[-1, 1]` (1e-3 slack); `support_height` within [`MAX_WORLD_COORD_M`]. Each used receipt's
+/// `outcome` one of [`frame_outcome`] (`receipt_count` itself is any count).
 ///
 /// Not checked: that a foreground object's `cluster_id` names a background object of the same
 /// message. The map is cut at [`MAX_OBJECTS`], which may leave out the background object, and a
@@ -687,6 +731,14 @@ impl Validate for ObjectMap {
                 return Err(c.err(
                     Field::item("objects", k, "id"),
                     format!("{} is also objects[{j}].id", o.id),
+                ));
+            }
+        }
+        for (k, r) in self.receipts().iter().enumerate() {
+            if r.outcome > frame_outcome::REFUSED {
+                return Err(c.err(
+                    Field::item("receipts", k, "outcome"),
+                    format!("{} is not one of frame_outcome", r.outcome),
                 ));
             }
         }
@@ -1199,8 +1251,9 @@ mod tests {
         );
         assert_eq!(
             size_of::<ObjectMap>(),
-            64 + MAX_OBJECTS * size_of::<MapObject>()
+            64 + MAX_OBJECTS * size_of::<MapObject>() + 24 * MAX_FRAME_RECEIPTS
         );
+        assert_eq!(size_of::<FrameReceipt>(), 24);
         assert_eq!(size_of::<OccupancyGrid>(), 24 + 24 + MAX_GRID_CELLS);
         assert_eq!(size_of::<NavGoal>(), 56);
         assert_eq!(size_of::<NeckGoal>(), 56);

@@ -310,6 +310,18 @@ fn object_map_rules() {
     let mut m = map();
     m.objects[1].points[2] = [f32::NAN; 3];
     assert_eq!(m.validate(), Ok(()));
+    // Receipts: each used outcome one of frame_outcome; a count past the capacity is data
+    // (receipts were lost), and entries past it are not part of the message.
+    let mut m = map();
+    m.receipt_count = 2;
+    m.receipts[1].outcome = shm_types::frame_outcome::REFUSED + 1;
+    rejects(m.validate(), "ObjectMap", "receipts[1].outcome", "4");
+    m.receipt_count = 1;
+    assert_eq!(m.validate(), Ok(()));
+    m.receipt_count = 1000;
+    m.receipts[1].outcome = 0;
+    m.receipts[15].outcome = 7;
+    rejects(m.validate(), "ObjectMap", "receipts[15].outcome", "7");
 }
 
 #[test]

@@ -14,7 +14,8 @@
 //!   lockstep trace there is none.
 //! - `--check` on a live trace (host `live`: processes on real clocks, so the mapper saw its
 //!   frames at times of its own and the planner ran on whichever map was newest): the maps are
-//!   reproduced to a stated tolerance instead, see [`live`]; decisions and goals are not compared.
+//!   reproduced bit for bit by following the frame receipts each map carries, see [`live`];
+//!   decisions and goals are not compared.
 //! - With another config or planner: the new maps, decisions and goals are written to a new trace
 //!   (`OUT/trace.mcap`), the decisions also as `OUT/decisions.csv`, and the final map as
 //!   `OUT/map.json` with its scores against the ground truth in `OUT/metrics.json` when the
@@ -133,7 +134,7 @@ pub struct ReplayReport {
     pub end_ns: u64,
     /// Why the replayed planner stopped, if it finished.
     pub finished: Option<String>,
-    /// The tolerance check of a live trace (`check` on a trace of host `live`).
+    /// The check of a live trace (`check` on a trace of host `live`).
     pub live: Option<live::LiveCheck>,
 }
 

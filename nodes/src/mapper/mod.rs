@@ -79,7 +79,10 @@ use grid::ExplorationGrid;
 use object::{FitParams, MappedObject};
 use points::{ExtractParams, PointScratch, SupportPlane, rest_on_support};
 use runtime::config::{Checker, ConfigError};
-use shm_types::{DepthFrame, Detections, RobotState, Validate, is_background_class, mask_mode};
+use shm_types::{
+    DepthFrame, Detections, FrameReceipt, MAX_FRAME_RECEIPTS, RobotState, Validate, frame_outcome,
+    is_background_class, mask_mode,
+};
 use std::collections::HashMap;
 use wilcoxon::RankScratch;
 
@@ -171,6 +174,10 @@ pub struct Mapper {
     last_frame_seq: u64,
     last_frame_stamp_ns: u64,
     last_sim_time_ns: u64,
+    /// The frames consumed since the last [`Mapper::write_map`], the newest
+    /// [`MAX_FRAME_RECEIPTS`] of `receipt_count`.
+    receipts: Vec<FrameReceipt>,
+    receipt_count: u32,
     // Scratch (reused every frame).
     point_scratch: PointScratch,
     cuboid_scratch: CuboidScratch,
@@ -208,6 +215,8 @@ impl Mapper {
             last_frame_seq: 0,
             last_frame_stamp_ns: 0,
             last_sim_time_ns: 0,
+            receipts: Vec::with_capacity(MAX_FRAME_RECEIPTS),
+            receipt_count: 0,
             point_scratch: PointScratch::default(),
             cuboid_scratch: CuboidScratch::default(),
             ranks: RankScratch::default(),
@@ -245,8 +254,50 @@ impl Mapper {
     }
 
     /// Integrate one depth frame with its detections. Frames taken while localization is lost
-    /// (`state.localization_ok == 0`) are skipped (their pose cannot be trusted).
+    /// (`state.localization_ok == 0`) are skipped (their pose cannot be trusted). Every call
+    /// leaves a receipt (frame, state, outcome) in the next map written.
     pub fn integrate(
+        &mut self,
+        frame: &DepthFrame,
+        detections: &Detections,
+        state: &RobotState,
+    ) -> Result<FrameStats, MapperError> {
+        let r = self.integrate_frame(frame, detections, state);
+        let outcome = match &r {
+            Ok(s) if s.skipped => frame_outcome::SKIPPED_LOST,
+            Ok(_) => frame_outcome::INTEGRATED,
+            Err(_) => frame_outcome::REFUSED,
+        };
+        self.receipt(frame.header.seq, state.header.seq, outcome);
+        r
+    }
+
+    /// A frame the host skipped because no matching detections arrived: a receipt in the next
+    /// map, nothing else.
+    pub fn note_unmatched(&mut self, frame_seq: u64, state_seq: u64) {
+        self.receipt(frame_seq, state_seq, frame_outcome::NO_DETECTIONS);
+    }
+
+    /// The next map's receipts are full: a host publishes it now, before the next frame, so that
+    /// no receipt is lost.
+    pub fn receipts_full(&self) -> bool {
+        self.receipt_count as usize >= MAX_FRAME_RECEIPTS
+    }
+
+    fn receipt(&mut self, frame_seq: u64, state_seq: u64, outcome: u32) {
+        if self.receipts.len() == MAX_FRAME_RECEIPTS {
+            self.receipts.remove(0);
+        }
+        self.receipts.push(FrameReceipt {
+            frame_seq,
+            state_seq,
+            outcome,
+            reserved: 0,
+        });
+        self.receipt_count = self.receipt_count.saturating_add(1);
+    }
+
+    fn integrate_frame(
         &mut self,
         frame: &DepthFrame,
         detections: &Detections,
@@ -663,10 +714,11 @@ mod tests {
         d.width = 64;
         d.height = 48;
         d.frame_seq = 4;
-        let ok = RobotState {
+        let mut ok = RobotState {
             localization_ok: 1,
             ..Default::default()
         };
+        ok.header.seq = 70;
         assert!(matches!(
             m.integrate(&f, &d, &ok),
             Err(MapperError::FrameMismatch { frame_seq: 5, .. })
@@ -682,10 +734,40 @@ mod tests {
         let lost = RobotState::default();
         assert!(m.integrate(&f, &d, &lost).unwrap().skipped);
         let mut map = shm_types::boxed_zeroed::<shm_types::ObjectMap>();
+        m.note_unmatched(6, 71);
         m.write_map(&mut map, 9);
         assert_eq!(
             (map.count, map.last_frame_seq, map.header.sim_time_ns),
             (0, 5, 9)
         );
+        // Every frame consumed is in the map's receipts, with its state and outcome.
+        let receipt = |frame_seq, state_seq, outcome| FrameReceipt {
+            frame_seq,
+            state_seq,
+            outcome,
+            reserved: 0,
+        };
+        use frame_outcome::*;
+        assert_eq!(
+            map.receipts(),
+            [
+                receipt(5, 70, REFUSED),
+                receipt(5, 70, REFUSED),
+                receipt(5, 70, INTEGRATED),
+                receipt(5, 0, SKIPPED_LOST),
+                receipt(6, 71, NO_DETECTIONS),
+            ]
+        );
+        // ... and only in that map; past the capacity the count says receipts were lost.
+        m.write_map(&mut map, 10);
+        assert_eq!(map.receipt_count, 0);
+        for k in 0..MAX_FRAME_RECEIPTS as u64 + 2 {
+            assert_eq!(m.receipts_full(), k >= MAX_FRAME_RECEIPTS as u64);
+            m.note_unmatched(100 + k, 0);
+        }
+        m.write_map(&mut map, 11);
+        assert_eq!(map.receipt_count as usize, MAX_FRAME_RECEIPTS + 2);
+        assert_eq!(map.receipts()[0].frame_seq, 102);
+        assert_eq!(map.validate(), Ok(()));
     }
 }

@@ -18,14 +18,19 @@ impl Mapper {
 
     /// Write the whole map in place into `out` (e.g. a loaned shared-memory sample). Sets
     /// `header.sim_time_ns = now_ns`, `last_frame_seq`, `last_frame_stamp_ns`, `count`,
-    /// `eps_sopm` and the objects (ordered by id; at most [`MAX_OBJECTS`]); the host sets
-    /// `header.seq` and `header.stamp_ns`. Objects seen fewer than `min_observations` times are
+    /// `eps_sopm`, the objects (ordered by id; at most [`MAX_OBJECTS`]) and the receipts of the
+    /// frames consumed since the last call (then cleared); the host sets `header.seq` and
+    /// `header.stamp_ns`. Objects seen fewer than `min_observations` times are
     /// left out. Unused object slots are not touched.
     pub fn write_map(&mut self, out: &mut ObjectMap, now_ns: u64) {
         out.header.sim_time_ns = now_ns;
         out.last_frame_seq = self.last_frame_seq;
         out.last_frame_stamp_ns = self.last_frame_stamp_ns;
         out.eps_sopm = self.cfg.sopm.eps_sopm;
+        out.receipt_count = std::mem::take(&mut self.receipt_count);
+        out.receipts = Default::default();
+        out.receipts[..self.receipts.len()].copy_from_slice(&self.receipts);
+        self.receipts.clear();
         let mut count = 0usize;
         let mut samples = std::mem::take(&mut self.samples);
         for o in &self.objects {

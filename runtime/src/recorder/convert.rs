@@ -14,8 +14,8 @@ use foxglove::messages::{
 use glam::{DMat3, DQuat, DVec3};
 use shm_types::{
     DeadlineEvent, DepthFrame, Detections, MapObject, NavGoal, NeckGoal, NodeHealth, ObjectMap,
-    OccupancyGrid, PlannerDecision, RobotState, class_name, decision_kind, goal_kind, miss_cause,
-    planner_state,
+    OccupancyGrid, PlannerDecision, RobotState, class_name, decision_kind, frame_outcome,
+    goal_kind, miss_cause, planner_state,
 };
 
 // ---- producer-side copies (no allocation) --------------------------------------------------
@@ -521,6 +521,27 @@ pub fn map_meta(m: &ObjectMap) -> own::MapMeta {
         frames_integrated: m.frames_integrated,
         frames_rejected: m.frames_rejected,
         frames_unmatched: m.frames_unmatched,
+        receipt_count: m.receipt_count,
+        receipts: m
+            .receipts()
+            .iter()
+            .map(|r| own::FrameReceipt {
+                frame_seq: r.frame_seq,
+                state_seq: r.state_seq,
+                outcome: frame_outcome_name(r.outcome).into(),
+            })
+            .collect(),
+    }
+}
+
+/// The name of a [`shm_types::frame_outcome`] value in traces.
+pub fn frame_outcome_name(outcome: u32) -> &'static str {
+    match outcome {
+        frame_outcome::INTEGRATED => "integrated",
+        frame_outcome::SKIPPED_LOST => "skipped_lost",
+        frame_outcome::NO_DETECTIONS => "no_detections",
+        frame_outcome::REFUSED => "refused",
+        _ => "invalid",
     }
 }
 

@@ -95,6 +95,23 @@ pub struct MapMeta {
     pub frames_rejected: u32,
     /// Frames with no matching detections so far.
     pub frames_unmatched: u32,
+    /// Frames consumed since the previous map (more than `receipts` holds: receipts were lost).
+    #[serde(default)]
+    pub receipt_count: u32,
+    /// What the mapper did with each of them, oldest first: the inputs this map consumed.
+    #[serde(default)]
+    pub receipts: Vec<FrameReceipt>,
+}
+
+/// One depth frame a map consumed (`/map/meta` `receipts`).
+#[derive(Debug, Clone, Default, PartialEq, Encode, Serialize, Deserialize)]
+pub struct FrameReceipt {
+    /// Header seq of the depth frame.
+    pub frame_seq: u64,
+    /// Header seq of the robot state the mapper held for it (0: none yet).
+    pub state_seq: u64,
+    /// `integrated`, `skipped_lost`, `no_detections` or `refused`.
+    pub outcome: String,
 }
 
 /// A navigation goal (`/planner/nav_goal`).

@@ -51,6 +51,7 @@ struct_kind!(
     Detection,
     MapObject,
     Candidate,
+    FrameReceipt,
     ObjectVisibility,
     InputHealth
 );
@@ -181,6 +182,12 @@ pub(super) fn types() -> Vec<TypeLayout> {
             point_los: "1",
             support_height: "m",
         }),
+        layout!(FrameReceipt {
+            frame_seq: "id",
+            state_seq: "id",
+            outcome: "enum frame_outcome",
+            reserved: "pad",
+        }),
         layout!(ObjectMap {
             header: "struct",
             last_frame_seq: "id",
@@ -190,8 +197,9 @@ pub(super) fn types() -> Vec<TypeLayout> {
             frames_integrated: "count",
             frames_rejected: "count",
             frames_unmatched: "count",
-            reserved: "pad",
+            receipt_count: "count",
             objects: "struct",
+            receipts: "struct",
         }),
         layout!(OccupancyGrid {
             header: "struct",
@@ -398,8 +406,8 @@ macro_rules! constants {
 mod capacity {
     pub use crate::{HEALTH_NODE_LEN, HEALTH_TOPIC_LEN, MAX_HEALTH_INPUTS};
     pub use crate::{
-        MAX_CANDIDATES, MAX_DETECTIONS, MAX_GRID_CELLS, MAX_HEIGHT, MAX_OBJECT_POINTS, MAX_OBJECTS,
-        MAX_PIXELS, MAX_SOPM_CELLS, MAX_WIDTH, THREAD_NAME_LEN,
+        MAX_CANDIDATES, MAX_DETECTIONS, MAX_FRAME_RECEIPTS, MAX_GRID_CELLS, MAX_HEIGHT,
+        MAX_OBJECT_POINTS, MAX_OBJECTS, MAX_PIXELS, MAX_SOPM_CELLS, MAX_WIDTH, THREAD_NAME_LEN,
     };
     /// Number of COCO classes (valid class ids are `0..COCO_CLASS_COUNT`).
     pub const COCO_CLASS_COUNT: usize = crate::COCO_CLASSES.len();
@@ -417,6 +425,7 @@ pub(super) fn constants() -> Vec<Constant> {
             MAX_OBJECT_POINTS,
             MAX_GRID_CELLS,
             MAX_CANDIDATES,
+            MAX_FRAME_RECEIPTS,
             THREAD_NAME_LEN,
             MAX_HEALTH_INPUTS,
             HEALTH_TOPIC_LEN,
@@ -431,5 +440,6 @@ pub(super) fn constants() -> Vec<Constant> {
         miss_cause: [NONE, EXECUTION, RUN_QUEUE, LATE_WAKEUP, BLOCKED, UNKNOWN],
         decision_kind: [GBV, LBV],
         planner_state: [RUNNING, TERMINATED, NO_CANDIDATES],
+        frame_outcome: [INTEGRATED, SKIPPED_LOST, NO_DETECTIONS, REFUSED],
     )
 }

@@ -203,20 +203,23 @@ impl NodeHost for MapperHost {
         if let Some(s) = self.state_sub.latest()? {
             self.state = *s;
         }
-        let Some(det) = self.detections_of(frame.header.seq, stop)? else {
-            eprintln!("mapper: no detections for frame {}", frame.header.seq);
-            self.counts.unmatched += 1;
-            return Ok(Flow::Busy);
-        };
-        match self.mapper.integrate(&frame, &det, &self.state) {
-            Ok(_) => self.counts.integrated += 1,
-            Err(e) => {
-                eprintln!("mapper: frame {}: {e}", frame.header.seq);
-                match e {
-                    MapperError::Invalid { .. } => self.counts.rejected += 1,
-                    _ => self.counts.unmatched += 1,
-                }
+        match self.detections_of(frame.header.seq, stop)? {
+            None => {
+                eprintln!("mapper: no detections for frame {}", frame.header.seq);
+                self.counts.unmatched += 1;
+                self.mapper
+                    .note_unmatched(frame.header.seq, self.state.header.seq);
             }
+            Some(det) => match self.mapper.integrate(&frame, &det, &self.state) {
+                Ok(_) => self.counts.integrated += 1,
+                Err(e) => {
+                    eprintln!("mapper: frame {}: {e}", frame.header.seq);
+                    match e {
+                        MapperError::Invalid { .. } => self.counts.rejected += 1,
+                        _ => self.counts.unmatched += 1,
+                    }
+                }
+            },
         }
         let t = frame.header.sim_time_ns;
         if t < self.last_t {
@@ -228,6 +231,10 @@ impl NodeHost for MapperHost {
         if t >= self.next_map {
             self.publish(t)?;
             self.next_map = t + self.map_period;
+        } else if self.mapper.receipts_full() {
+            // Every frame consumed is named in a map (`ObjectMap::receipts`): publish early
+            // rather than lose a receipt.
+            self.publish(t)?;
         }
         Ok(Flow::Busy)
     }

@@ -1,24 +1,27 @@
-//! `vpsom replay --check` on a live trace: the maps, reproduced to a tolerance.
+//! `vpsom replay --check` on a live trace: the maps, reproduced exactly.
 //!
-//! In a live run the mapper is a process of its own. It integrates the frames it receives in
-//! order, with the newest robot state it has, and publishes a map when a map period has passed;
-//! every map says how many frames it integrated (`/map/meta` `frames_integrated`). The check
-//! follows that record: before each recorded map it feeds a fresh mapper the recorded frames in
-//! order (with the newest recorded state not later than each frame, and the frame's detections
-//! by `frame_seq`) until it has integrated as many, writes the map at the recorded time, and
-//! compares it with the recorded one object by object:
+//! In a live run the mapper is a process of its own. Which frames it reads (a frame its buffer
+//! overwrote is never read), which robot state it holds for each (the newest it has received,
+//! racing with the sim's next state) and whether the detections came in time are the host's
+//! timing, not the mapper's logic. So the mapper says what it consumed: every map carries the
+//! receipts of the frames consumed since the previous one (`ObjectMap::receipts`, recorded on
+//! `/map/meta`): frame seq, the seq of the state it held, and the outcome (integrated, skipped
+//! for lost localization, no detections, refused). The check follows them: before each
+//! recorded map it feeds a fresh mapper the frames the receipts name, each with the recorded
+//! state of that seq and the frame's detections (by `frame_seq`), writes the map at the
+//! recorded time and requires
 //!
-//! - the same object ids, with the same class and background flag;
-//! - each centre within [`CENTER_TOL_M`] and each size within [`SIZE_TOL_M`] per axis;
-//! - the same number of frames integrated (fewer only if the trace lacks frames).
+//! - the same receipts (the replayed mapper came to the same outcome for every frame), and
+//! - the same objects bit for bit: the recorded `/map/objects` scene update and the replayed
+//!   one are equal (ids, classes, flags, cuboids, SOPM summary).
 //!
-//! The tolerance covers what a live host changes and the logic does not decide: the state the
-//! mapper took for a frame (the newest it had received; here the newest recorded not later than
-//! the frame, measured closer than the state before it). The state decides only whether the
-//! frame is skipped for a lost localization. A frame the live mapper never read (overwritten in its buffer) is integrated here in
-//! its place, so the maps after it differ beyond the tolerance. The first map outside it is
-//! the divergence. Decisions and goals are not compared: which map the planner ran on, and when
-//! its GBV job came back, are the host's timing.
+//! The first map that differs is the divergence; the check goes on to the end and counts the
+//! maps that are identical. A trace without receipts (recorded before they were added), or
+//! one that lacks an input a receipt names (dropped by the recorder: counted and reported), is
+//! reported as such. A mapper restarted mid-run resumes from its last map, which a fresh
+//! mapper does not: the maps after a restart diverge. Decisions and goals are not compared:
+//! which map the planner ran on, and when its GBV job came back, are the host's timing and are
+//! not recorded.
 
 use super::{
     Divergence, Inputs, ReplayError, ReplayReport, depth_stream, detections_of, frame_of, image_at,
@@ -27,31 +30,26 @@ use super::{
 use crate::config::Config;
 use crate::mapper::Mapper;
 use runtime::recorder::convert;
-use runtime::recorder::foxglove::messages::SceneUpdate;
+use runtime::recorder::foxglove::messages::{RawImage, SceneUpdate};
 use runtime::recorder::messages as rec;
 use runtime::recorder::schemas::topic;
-use shm_types::{DepthFrame, Detections, ObjectMap, RobotState, boxed_zeroed};
+use shm_types::{DepthFrame, Detections, ObjectMap, RobotState, boxed_zeroed, frame_outcome};
+use std::collections::HashMap;
 use std::fmt;
 use std::path::Path;
+use std::sync::mpsc::Receiver;
 
-/// Largest distance between a recorded and a replayed object centre still within tolerance, m.
-pub const CENTER_TOL_M: f64 = 0.02;
-/// Largest difference of a recorded and a replayed object size, per axis, m.
-pub const SIZE_TOL_M: f64 = 0.02;
-
-/// What the tolerance check of a live trace found.
+/// What the check of a live trace found.
 #[derive(Debug, Clone, Default, PartialEq)]
 pub struct LiveCheck {
     /// Recorded maps compared.
     pub maps: u64,
-    /// Of which within tolerance.
-    pub within: u64,
-    /// Objects compared (over every map).
+    /// Of which reproduced bit for bit.
+    pub identical: u64,
+    /// Objects of the recorded maps (over every map).
     pub objects: u64,
-    /// Largest centre deviation of a matched object, m.
-    pub max_center_m: f64,
-    /// Largest size deviation of a matched object, per axis, m.
-    pub max_size_m: f64,
+    /// Frames the receipts named (fed to the mapper or noted as without detections).
+    pub receipts: u64,
     /// Messages the recorder dropped (a dropped input makes the maps after it differ).
     pub dropped: u64,
 }
@@ -60,11 +58,10 @@ impl fmt::Display for LiveCheck {
     fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
         writeln!(
             f,
-            "live trace: {} of {} maps within tolerance (centre {CENTER_TOL_M} m, size \
-             {SIZE_TOL_M} m, same ids, classes and frame counts); {} objects compared, largest \
-             deviation centre {:.4} m, size {:.4} m; {} messages dropped by the recorder; decisions \
-             and goals not compared (host timing)",
-            self.within, self.maps, self.objects, self.max_center_m, self.max_size_m, self.dropped
+            "live trace: {} of {} maps identical ({} objects; the mapper fed the {} frames the \
+             maps' receipts name, each with the state the live mapper held); {} messages \
+             dropped by the recorder; decisions and goals not compared (host timing)",
+            self.identical, self.maps, self.objects, self.receipts, self.dropped
         )
     }
 }
@@ -104,109 +101,116 @@ fn cuboids(u: &SceneUpdate) -> Vec<Cuboid> {
         .collect()
 }
 
-/// Compare a replayed map with the recorded one; `Err` says what is outside the tolerance.
-fn compare(got: &[Cuboid], want: &[Cuboid], stats: &mut LiveCheck) -> Result<(), String> {
-    if got.len() != want.len() {
-        return Err(format!(
+/// The first difference between a replayed and a recorded map that differ.
+fn describe(got: &SceneUpdate, want: &SceneUpdate) -> String {
+    let (got_c, want_c) = (cuboids(got), cuboids(want));
+    if got_c.len() != want_c.len() {
+        return format!(
             "{} objects recorded, {} replayed",
-            want.len(),
-            got.len()
-        ));
+            want_c.len(),
+            got_c.len()
+        );
     }
-    for w in want {
-        let Some(g) = got.iter().find(|g| g.id == w.id) else {
-            return Err(format!("{} ({}) recorded, not replayed", w.id, w.class));
+    for w in &want_c {
+        let Some(g) = got_c.iter().find(|g| g.id == w.id) else {
+            return format!("{} ({}) recorded, not replayed", w.id, w.class);
         };
         if (&g.class, &g.background) != (&w.class, &w.background) {
-            return Err(format!(
+            return format!(
                 "{}: recorded {} (background {}), replayed {} (background {})",
                 w.id, w.class, w.background, g.class, g.background
-            ));
+            );
         }
-        let dc = (0..3)
-            .map(|i| (g.center[i] - w.center[i]).powi(2))
-            .sum::<f64>()
-            .sqrt();
-        let ds = (0..3)
-            .map(|i| (g.size[i] - w.size[i]).abs())
-            .fold(0.0, f64::max);
-        stats.objects += 1;
-        stats.max_center_m = stats.max_center_m.max(dc);
-        stats.max_size_m = stats.max_size_m.max(ds);
-        if dc > CENTER_TOL_M || ds > SIZE_TOL_M {
-            return Err(format!(
-                "{} ({}): centre {:.4} m and size {:.4} m from the recording (tolerance \
-                 {CENTER_TOL_M} m, {SIZE_TOL_M} m)",
-                w.id, w.class, dc, ds
-            ));
+        if g != w {
+            let dc = (0..3)
+                .map(|i| (g.center[i] - w.center[i]).powi(2))
+                .sum::<f64>()
+                .sqrt();
+            let ds = (0..3)
+                .map(|i| (g.size[i] - w.size[i]).abs())
+                .fold(0.0, f64::max);
+            return format!(
+                "{} ({}): centre {dc:.2e} m and size {ds:.2e} m from the recording",
+                w.id, w.class
+            );
         }
     }
-    Ok(())
+    let id = got
+        .entities
+        .iter()
+        .zip(&want.entities)
+        .find(|(g, w)| g != w)
+        .map_or("the update", |(_, w)| w.id.as_str());
+    format!("{id}: the same cuboid, other fields differ (metadata, colour or lifetime)")
 }
 
-/// The tolerance check of a live trace (module docs).
+/// The check of a live trace (module docs).
 pub(super) fn check(path: &Path, inp: Inputs, cfg: &Config) -> Result<ReplayReport, ReplayError> {
+    let outputs = &inp.outputs;
+    if outputs.map_meta.iter().all(|(_, m)| m.receipt_count == 0)
+        && outputs
+            .map_meta
+            .iter()
+            .any(|(_, m)| m.frames_integrated > 0)
+    {
+        return Err(trace_err(
+            path,
+            "/map/meta has no frame receipts (a trace recorded before they were added): the \
+             frames each map consumed are not known; record the run again",
+        ));
+    }
     let mut mapper = Mapper::new(&cfg.mapper, &cfg.camera.camera())?;
-    let (mut frame, mut dets) = (boxed_zeroed::<DepthFrame>(), boxed_zeroed::<Detections>());
     let mut map = boxed_zeroed::<ObjectMap>();
-    let mut metas: Vec<_> = inp.depth_meta.values().collect();
-    metas.sort_by_key(|m| m.seq);
-    // By frame: a live detector stamps its detections with a time of its own.
-    let by_frame: std::collections::HashMap<u64, &rec::DetectionsRaw> =
-        inp.detections.values().map(|d| (d.frame_seq, d)).collect();
-    let frames = depth_stream(path);
+    let mut feed = Feed {
+        path,
+        frames: depth_stream(path),
+        metas: inp.depth_meta.values().map(|m| (m.seq, m)).collect(),
+        // By frame: a live detector stamps its detections with a time of its own.
+        detections: inp.detections.values().map(|d| (d.frame_seq, d)).collect(),
+        states: inp.states.iter().map(|s| (s.seq, s)).collect(),
+        frame: boxed_zeroed::<DepthFrame>(),
+        dets: boxed_zeroed::<Detections>(),
+    };
     let mut report = ReplayReport::default();
     let mut stats = LiveCheck {
         dropped: inp.dropped,
         ..LiveCheck::default()
     };
-    let (mut next_frame, mut next_state) = (0usize, 0usize);
-    let mut state = RobotState::default();
-    let mut integrated = 0u32;
-    let outputs = inp.outputs;
     for (i, ((t, want), (_, meta))) in outputs.maps.iter().zip(&outputs.map_meta).enumerate() {
-        while integrated < meta.frames_integrated {
-            let Some(m) = metas.get(next_frame) else {
-                break;
-            };
-            next_frame += 1;
-            let ft = m.sim_time_ns;
-            let img = image_at(&frames, path, ft)?;
-            while let Some(s) = inp.states.get(next_state).filter(|s| s.sim_time_ns <= ft) {
-                state = state_of(s).map_err(|e| trace_err(path, format!("/robot/state: {e}")))?;
-                next_state += 1;
+        let r = feed.consume(&mut mapper, meta, &mut stats).and_then(|()| {
+            mapper.write_map(&mut map, meta.sim_time_ns);
+            let got = convert::map_meta(&map);
+            if got.receipts != meta.receipts {
+                let k = got
+                    .receipts
+                    .iter()
+                    .zip(&meta.receipts)
+                    .position(|(g, w)| g != w)
+                    .unwrap_or(got.receipts.len().min(meta.receipts.len()));
+                let name = |r: Option<&rec::FrameReceipt>| {
+                    r.map_or("nothing".into(), |r| {
+                        format!("frame {} {}", r.frame_seq, r.outcome)
+                    })
+                };
+                return Err(format!(
+                    "receipt {k}: recorded {}, replayed {}",
+                    name(meta.receipts.get(k)),
+                    name(got.receipts.get(k))
+                ));
             }
-            // Without its detections the live mapper skipped the frame too.
-            let Some(d) = by_frame.get(&m.seq) else {
-                continue;
-            };
-            frame_of(m, &img, &mut frame).map_err(|e| trace_err(path, e))?;
-            detections_of(d, &mut dets).map_err(|e| trace_err(path, e))?;
-            // A frame the mapper refuses the live mapper counted as rejected or unmatched.
-            if mapper.integrate(&frame, &dets, &state).is_ok() {
-                integrated += 1;
+            stats.objects += cuboids(want).len() as u64;
+            let got = convert::map_objects(&map);
+            if got == *want {
+                Ok(())
+            } else {
+                Err(describe(&got, want))
             }
-            report.frames += 1;
-        }
-        mapper.write_map(&mut map, meta.sim_time_ns);
+        });
         stats.maps += 1;
         *report.produced.entry(topic::MAP).or_insert(0) += 1;
         *report.compared.entry(topic::MAP).or_insert(0) += 1;
-        let r = if integrated != meta.frames_integrated {
-            Err(format!(
-                "{} frames integrated by the live mapper, only {integrated} here: the trace lacks \
-                 frames it read",
-                meta.frames_integrated
-            ))
-        } else {
-            compare(
-                &cuboids(&convert::map_objects(&map)),
-                &cuboids(want),
-                &mut stats,
-            )
-        };
         match r {
-            Ok(()) => stats.within += 1,
+            Ok(()) => stats.identical += 1,
             Err(detail) => {
                 if report.divergence.is_none() {
                     report.divergence = Some(Divergence {
@@ -221,39 +225,97 @@ pub(super) fn check(path: &Path, inp: Inputs, cfg: &Config) -> Result<ReplayRepo
         report.end_ns = meta.sim_time_ns;
     }
     report.steps = inp.states.len() as u64;
+    report.frames = stats.receipts;
     report.live = Some(stats);
     Ok(report)
+}
+
+/// The recorded inputs, looked up the way a map's receipts name them.
+struct Feed<'a> {
+    path: &'a Path,
+    frames: Receiver<Result<(u64, RawImage), String>>,
+    metas: HashMap<u64, &'a rec::DepthMeta>,
+    detections: HashMap<u64, &'a rec::DetectionsRaw>,
+    states: HashMap<u64, &'a rec::RobotStateRaw>,
+    frame: Box<DepthFrame>,
+    dets: Box<Detections>,
+}
+
+impl Feed<'_> {
+    /// Feed `mapper` the frames a recorded map consumed, as its receipts name them: each frame
+    /// with the state the live mapper held and its detections; a frame without detections only
+    /// leaves its receipt. `Err` says which input the trace lacks.
+    fn consume(
+        &mut self,
+        mapper: &mut Mapper,
+        meta: &rec::MapMeta,
+        stats: &mut LiveCheck,
+    ) -> Result<(), String> {
+        if meta.receipt_count as usize > meta.receipts.len() {
+            return Err(format!(
+                "the live mapper consumed {} frames for this map, its receipts name only {}",
+                meta.receipt_count,
+                meta.receipts.len()
+            ));
+        }
+        for r in &meta.receipts {
+            stats.receipts += 1;
+            if r.outcome == convert::frame_outcome_name(frame_outcome::NO_DETECTIONS) {
+                mapper.note_unmatched(r.frame_seq, r.state_seq);
+                continue;
+            }
+            let m = self
+                .metas
+                .get(&r.frame_seq)
+                .ok_or_else(|| format!("the trace lacks depth frame {}", r.frame_seq))?;
+            let d = self.detections.get(&r.frame_seq).ok_or_else(|| {
+                format!("the trace lacks the detections of frame {}", r.frame_seq)
+            })?;
+            let state = match r.state_seq {
+                0 => RobotState::default(),
+                seq => self
+                    .states
+                    .get(&seq)
+                    .ok_or_else(|| format!("the trace lacks robot state {seq}"))
+                    .and_then(|s| state_of(s).map_err(|e| format!("/robot/state: {e}")))?,
+            };
+            let img =
+                image_at(&self.frames, self.path, m.sim_time_ns).map_err(|e| e.to_string())?;
+            frame_of(m, &img, &mut self.frame)?;
+            detections_of(d, &mut self.dets)?;
+            // A refusal is a receipt too: compared with the recorded one after the map.
+            let _ = mapper.integrate(&self.frame, &self.dets, &state);
+        }
+        Ok(())
+    }
 }
 
 #[cfg(test)]
 mod tests {
     use super::*;
+    use shm_types::class_id;
 
-    fn cuboid(id: &str, class: &str, center: [f64; 3]) -> Cuboid {
-        Cuboid {
-            id: id.into(),
-            class: class.into(),
-            background: "false".into(),
-            center,
-            size: [0.1, 0.1, 0.12],
-        }
+    fn map_with(center: [f32; 3], class: &str) -> SceneUpdate {
+        let mut m = boxed_zeroed::<ObjectMap>();
+        m.count = 1;
+        let o = &mut m.objects[0];
+        o.id = 1;
+        o.class_id = class_id(class).unwrap();
+        o.center = center;
+        o.size = [0.1, 0.1, 0.12];
+        convert::map_objects(&m)
     }
 
     #[test]
-    fn maps_within_the_tolerance_pass_and_outside_it_diverge() {
-        let want = [cuboid("obj/1", "cup", [1.0, 0.0, 0.8])];
-        let mut s = LiveCheck::default();
-        assert!(compare(&[cuboid("obj/1", "cup", [1.015, 0.0, 0.8])], &want, &mut s).is_ok());
-        assert!((s.max_center_m - 0.015).abs() < 1e-9 && s.objects == 1);
-        let far = compare(&[cuboid("obj/1", "cup", [1.03, 0.0, 0.8])], &want, &mut s);
-        assert!(far.unwrap_err().contains("centre 0.0300 m"));
-        let class = compare(&[cuboid("obj/1", "bowl", [1.0, 0.0, 0.8])], &want, &mut s);
-        assert!(class.unwrap_err().contains("replayed bowl"));
-        let id = compare(&[cuboid("obj/2", "cup", [1.0, 0.0, 0.8])], &want, &mut s);
-        assert!(id.unwrap_err().contains("not replayed"));
-        assert!(compare(&[], &want, &mut s).is_err());
-        let mut big = cuboid("obj/1", "cup", [1.0, 0.0, 0.8]);
-        big.size[2] = 0.15;
-        assert!(compare(&[big], &want, &mut s).is_err());
+    fn the_first_difference_of_two_maps_is_named() {
+        let want = map_with([1.0, 0.0, 0.8], "cup");
+        assert_eq!(map_with([1.0, 0.0, 0.8], "cup"), want);
+        let moved = describe(&map_with([1.0, 0.001, 0.8], "cup"), &want);
+        assert!(moved.contains("centre 1.00e-3 m"), "{moved}");
+        let class = describe(&map_with([1.0, 0.0, 0.8], "bowl"), &want);
+        assert!(class.contains("replayed bowl"), "{class}");
+        let mut none = want.clone();
+        none.entities.clear();
+        assert!(describe(&none, &want).contains("1 objects recorded, 0 replayed"));
     }
 }
