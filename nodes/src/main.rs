@@ -680,13 +680,6 @@ fn replay_cmd(config: Option<PathBuf>, cmd: ReplayCmd) -> anyhow::Result<ExitCod
     print!("{r}");
     if cmd.check {
         return Ok(match &r.divergence {
-            None if r.live.is_some() => {
-                println!(
-                    "identical: every map reproduced exactly (a live trace: decisions and goals \
-                     not compared)"
-                );
-                ExitCode::SUCCESS
-            }
             None => {
                 println!("identical: every map, decision and goal reproduced exactly");
                 ExitCode::SUCCESS

@@ -89,7 +89,7 @@ fn write_session(path: &Path) -> RecorderSummary {
             yaw: 0.3,
             pitch: 0.49,
             score: 0.8,
-            reserved: 0,
+            ..NeckGoal::default()
         });
         h.record_deadline(&deadline(i));
         let mut beat = shm_types::NodeHealth::default();

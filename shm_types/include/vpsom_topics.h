@@ -435,7 +435,7 @@ VPSOM_STATIC_ASSERT(offsetof(vpsom_NavGoal, cluster_id) == 48, "vpsom_NavGoal.cl
 VPSOM_STATIC_ASSERT(offsetof(vpsom_NavGoal, kind) == 52, "vpsom_NavGoal.kind: offset");
 VPSOM_STATIC_ASSERT(offsetof(vpsom_NavGoal, reserved) == 53, "vpsom_NavGoal.reserved: offset");
 
-/* vpsom::NeckGoal: 56 bytes, alignment 8 */
+/* vpsom::NeckGoal: 80 bytes, alignment 8 */
 typedef struct vpsom_NeckGoal {
 #ifdef __cplusplus
     static constexpr const char *IOX2_TYPE_NAME = "vpsom::NeckGoal";
@@ -446,9 +446,12 @@ typedef struct vpsom_NeckGoal {
     float yaw;                               /* offset 40, rad */
     float pitch;                             /* offset 44, rad */
     float score;                             /* offset 48, 1 */
-    uint32_t reserved;                       /* offset 52, pad */
+    uint32_t round_done;                     /* offset 52, bool */
+    uint64_t state_seq;                      /* offset 56, id */
+    uint64_t nav_seq;                        /* offset 64, id */
+    uint64_t explore_seq;                    /* offset 72, id */
 } vpsom_NeckGoal;
-VPSOM_STATIC_ASSERT(sizeof(vpsom_NeckGoal) == 56, "vpsom_NeckGoal: size");
+VPSOM_STATIC_ASSERT(sizeof(vpsom_NeckGoal) == 80, "vpsom_NeckGoal: size");
 VPSOM_STATIC_ASSERT(VPSOM_ALIGNOF(vpsom_NeckGoal) == 8, "vpsom_NeckGoal: alignment");
 VPSOM_STATIC_ASSERT(offsetof(vpsom_NeckGoal, header) == 0, "vpsom_NeckGoal.header: offset");
 VPSOM_STATIC_ASSERT(offsetof(vpsom_NeckGoal, map_seq) == 24, "vpsom_NeckGoal.map_seq: offset");
@@ -456,7 +459,10 @@ VPSOM_STATIC_ASSERT(offsetof(vpsom_NeckGoal, frame_stamp_ns) == 32, "vpsom_NeckG
 VPSOM_STATIC_ASSERT(offsetof(vpsom_NeckGoal, yaw) == 40, "vpsom_NeckGoal.yaw: offset");
 VPSOM_STATIC_ASSERT(offsetof(vpsom_NeckGoal, pitch) == 44, "vpsom_NeckGoal.pitch: offset");
 VPSOM_STATIC_ASSERT(offsetof(vpsom_NeckGoal, score) == 48, "vpsom_NeckGoal.score: offset");
-VPSOM_STATIC_ASSERT(offsetof(vpsom_NeckGoal, reserved) == 52, "vpsom_NeckGoal.reserved: offset");
+VPSOM_STATIC_ASSERT(offsetof(vpsom_NeckGoal, round_done) == 52, "vpsom_NeckGoal.round_done: offset");
+VPSOM_STATIC_ASSERT(offsetof(vpsom_NeckGoal, state_seq) == 56, "vpsom_NeckGoal.state_seq: offset");
+VPSOM_STATIC_ASSERT(offsetof(vpsom_NeckGoal, nav_seq) == 64, "vpsom_NeckGoal.nav_seq: offset");
+VPSOM_STATIC_ASSERT(offsetof(vpsom_NeckGoal, explore_seq) == 72, "vpsom_NeckGoal.explore_seq: offset");
 
 /* vpsom::DeadlineEvent: 120 bytes, alignment 8 */
 typedef struct vpsom_DeadlineEvent {

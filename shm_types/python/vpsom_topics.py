@@ -342,7 +342,7 @@ class NavGoal(ctypes.Structure):
 
 
 class NeckGoal(ctypes.Structure):
-    """vpsom::NeckGoal: 56 bytes, alignment 8."""
+    """vpsom::NeckGoal: 80 bytes, alignment 8."""
 
     _fields_ = [
         ("header", Header),  # offset 0, struct
@@ -351,7 +351,10 @@ class NeckGoal(ctypes.Structure):
         ("yaw", ctypes.c_float),  # offset 40, rad
         ("pitch", ctypes.c_float),  # offset 44, rad
         ("score", ctypes.c_float),  # offset 48, 1
-        ("reserved", ctypes.c_uint32),  # offset 52, pad
+        ("round_done", ctypes.c_uint32),  # offset 52, bool
+        ("state_seq", ctypes.c_uint64),  # offset 56, id
+        ("nav_seq", ctypes.c_uint64),  # offset 64, id
+        ("explore_seq", ctypes.c_uint64),  # offset 72, id
     ]
 
     @staticmethod
@@ -645,14 +648,17 @@ LAYOUT = {
         "kind": {"offset": 52, "size": 1, "type": "u8", "dims": [], "unit": "enum goal_kind"},
         "reserved": {"offset": 53, "size": 3, "type": "u8", "dims": [3], "unit": "pad"},
     }},
-    "NeckGoal": {"type_name": "vpsom::NeckGoal", "size": 56, "align": 8, "fields": {
+    "NeckGoal": {"type_name": "vpsom::NeckGoal", "size": 80, "align": 8, "fields": {
         "header": {"offset": 0, "size": 24, "type": "Header", "dims": [], "unit": "struct"},
         "map_seq": {"offset": 24, "size": 8, "type": "u64", "dims": [], "unit": "id"},
         "frame_stamp_ns": {"offset": 32, "size": 8, "type": "u64", "dims": [], "unit": "ns"},
         "yaw": {"offset": 40, "size": 4, "type": "f32", "dims": [], "unit": "rad"},
         "pitch": {"offset": 44, "size": 4, "type": "f32", "dims": [], "unit": "rad"},
         "score": {"offset": 48, "size": 4, "type": "f32", "dims": [], "unit": "1"},
-        "reserved": {"offset": 52, "size": 4, "type": "u32", "dims": [], "unit": "pad"},
+        "round_done": {"offset": 52, "size": 4, "type": "u32", "dims": [], "unit": "bool"},
+        "state_seq": {"offset": 56, "size": 8, "type": "u64", "dims": [], "unit": "id"},
+        "nav_seq": {"offset": 64, "size": 8, "type": "u64", "dims": [], "unit": "id"},
+        "explore_seq": {"offset": 72, "size": 8, "type": "u64", "dims": [], "unit": "id"},
     }},
     "DeadlineEvent": {"type_name": "vpsom::DeadlineEvent", "size": 120, "align": 8, "fields": {
         "header": {"offset": 0, "size": 24, "type": "Header", "dims": [], "unit": "struct"},

@@ -891,11 +891,19 @@ pub struct NeckGoal {
     pub pitch: f32,
     /// Evaluation value F(v) of the chosen view.
     pub score: f32,
-    /// Padding, always 0.
-    pub reserved: u32,
+    /// 1 when a chassis-goal round's result was taken in the planner cycle that computed this
+    /// goal (after it), 0 otherwise.
+    pub round_done: u32,
+    /// `header.seq` of the [`RobotState`] the cycle used.
+    pub state_seq: u64,
+    /// `header.seq` of the navigation grid the cycle held (0: none yet).
+    pub nav_seq: u64,
+    /// `header.seq` of the exploration grid the cycle held (0: none yet).
+    pub explore_seq: u64,
 }
 
-/// Rules: `yaw` within [`MAX_YAW_RAD`], `pitch` within [`MAX_PITCH_RAD`], `score` finite.
+/// Rules: `yaw` within [`MAX_YAW_RAD`], `pitch` within [`MAX_PITCH_RAD`], `score` finite,
+/// `round_done` 0 or 1.
 impl Validate for NeckGoal {
     fn validate(&self) -> Result<(), ValidationError> {
         let c = Checker {
@@ -903,7 +911,11 @@ impl Validate for NeckGoal {
         };
         c.within("yaw", &[self.yaw], MAX_YAW_RAD)?;
         c.within("pitch", &[self.pitch], MAX_PITCH_RAD)?;
-        c.finite("score", &[self.score])
+        c.finite("score", &[self.score])?;
+        c.flag(
+            "round_done",
+            u8::try_from(self.round_done).unwrap_or(u8::MAX),
+        )
     }
 }
 
@@ -1256,7 +1268,7 @@ mod tests {
         assert_eq!(size_of::<FrameReceipt>(), 24);
         assert_eq!(size_of::<OccupancyGrid>(), 24 + 24 + MAX_GRID_CELLS);
         assert_eq!(size_of::<NavGoal>(), 56);
-        assert_eq!(size_of::<NeckGoal>(), 56);
+        assert_eq!(size_of::<NeckGoal>(), 80);
         assert_eq!(size_of::<DeadlineEvent>(), 24 + 56 + 8 + THREAD_NAME_LEN);
         assert_eq!(size_of::<Candidate>(), 60);
         assert_eq!(size_of::<PlannerDecision>(), 56 + 60 * MAX_CANDIDATES);

@@ -443,6 +443,7 @@ fn goal_ranges() {
     rejects(bad(|b| b.pitch = 1.6), "NeckGoal", "pitch", "1.6");
     rejects(bad(|b| b.pitch = -45.0), "NeckGoal", "pitch", "-45");
     rejects(bad(|b| b.score = f32::NAN), "NeckGoal", "score", "NaN");
+    rejects(bad(|b| b.round_done = 2), "NeckGoal", "round_done", "2");
     assert_eq!(bad(|b| b.pitch = -MAX_PITCH_RAD), Ok(()));
 }
 

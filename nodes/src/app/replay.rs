@@ -14,8 +14,8 @@
 //!   lockstep trace there is none.
 //! - `--check` on a live trace (host `live`: processes on real clocks, so the mapper saw its
 //!   frames at times of its own and the planner ran on whichever map was newest): the maps are
-//!   reproduced bit for bit by following the frame receipts each map carries, see [`live`];
-//!   decisions and goals are not compared.
+//!   reproduced bit for bit by following the frame receipts each map carries, and the
+//!   planner's cycles by following the inputs each neck goal names, see [`live`].
 //! - With another config or planner: the new maps, decisions and goals are written to a new trace
 //!   (`OUT/trace.mcap`), the decisions also as `OUT/decisions.csv`, and the final map as
 //!   `OUT/map.json` with its scores against the ground truth in `OUT/metrics.json` when the

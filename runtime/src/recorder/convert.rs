@@ -577,6 +577,10 @@ pub fn neck_goal(g: &NeckGoal) -> own::NeckGoal {
         yaw: g.yaw,
         pitch: g.pitch,
         score: g.score,
+        round_done: g.round_done != 0,
+        state_seq: g.state_seq,
+        nav_seq: g.nav_seq,
+        explore_seq: g.explore_seq,
     }
 }
 

@@ -158,6 +158,18 @@ pub struct NeckGoal {
     pub pitch: f32,
     /// Score.
     pub score: f32,
+    /// A chassis-goal round's result was taken in the cycle (after this goal).
+    #[serde(default)]
+    pub round_done: bool,
+    /// Sequence number of the robot state the cycle used.
+    #[serde(default)]
+    pub state_seq: u64,
+    /// Sequence number of the navigation grid the cycle held (0: none).
+    #[serde(default)]
+    pub nav_seq: u64,
+    /// Sequence number of the exploration grid the cycle held (0: none).
+    #[serde(default)]
+    pub explore_seq: u64,
 }
 
 /// One input of a node, as its heartbeat counts it ([`NodeHealth::inputs`]).

@@ -226,7 +226,10 @@ pub(super) fn types() -> Vec<TypeLayout> {
             yaw: "rad",
             pitch: "rad",
             score: "1",
-            reserved: "pad",
+            round_done: "bool",
+            state_seq: "id",
+            nav_seq: "id",
+            explore_seq: "id",
         }),
         layout!(DeadlineEvent {
             header: "struct",

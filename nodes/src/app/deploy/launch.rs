@@ -244,6 +244,19 @@ pub fn run(args: &RunArgs, cfg: &Config, exe: &Path) -> anyhow::Result<RunOutcom
             inherit_stdout: false,
             liveness: Some(liveness),
         })?;
+        if role == "recorder" {
+            // The recorder (first in launch order) subscribes to every topic before anything
+            // is published: the trace then holds every input the other nodes consume, from the
+            // first (`vpsom replay --check` follows them).
+            let until = Instant::now() + liveness.startup;
+            while !health.all_up(&["recorder"])
+                && Instant::now() < until
+                && !stop.load(Ordering::Relaxed)
+            {
+                health.poll(&mut launcher)?;
+                std::thread::sleep(Duration::from_millis(5));
+            }
+        }
     }
     let start = Instant::now();
     let mut log = SessionLog::starting_at(0);

@@ -290,6 +290,24 @@ impl NodeHost for PlannerHost {
         let t = self.state.header.sim_time_ns;
         let map: &ObjectMap = self.map.as_deref().unwrap_or(&self.empty_map);
 
+        // A finished chassis-goal round, taken after the LBV (polled first, so that the neck goal
+        // can say so: `vpsom replay --check` follows the cycle's inputs).
+        let mut round = None;
+        while let Some(done) = self.pool.try_recv() {
+            match done.result.map_err(|p| HostError::JobPanicked(p.0))? {
+                Work::Round(out) => {
+                    self.job_ns = self.clock.now_ns().saturating_sub(self.submitted_ns);
+                    self.job_outstanding = false;
+                    round = Some(out);
+                }
+                Work::Load(buffer) => {
+                    if let Some(l) = self.load.as_mut() {
+                        l.done(buffer);
+                    }
+                }
+            }
+        }
+
         // Local best view: never waits for the pool, no allocation in steady state.
         let start = self.clock.now_ns();
         let neck = self.planner.neck_goal(map, &self.state, t);
@@ -298,6 +316,10 @@ impl NodeHost for PlannerHost {
         *n = neck;
         n.map_seq = map.header.seq;
         n.frame_stamp_ns = map.last_frame_stamp_ns;
+        n.round_done = round.is_some() as u32;
+        n.state_seq = self.state.header.seq;
+        n.nav_seq = self.nav.as_ref().map_or(0, |g| g.header.seq);
+        n.explore_seq = self.explore.as_ref().map_or(0, |g| g.header.seq);
         n.send(host::stamp(&self.clock, t))?;
         let mut d = self.decision_pub.loan()?;
         if self.planner.lbv_decision(&mut d) {
@@ -309,21 +331,7 @@ impl NodeHost for PlannerHost {
         }
 
         // Chassis goals: rounds computed on the low-priority pool.
-        let mut step = None;
-        while let Some(done) = self.pool.try_recv() {
-            match done.result.map_err(|p| HostError::JobPanicked(p.0))? {
-                Work::Round(out) => {
-                    self.job_ns = self.clock.now_ns().saturating_sub(self.submitted_ns);
-                    self.job_outstanding = false;
-                    step = Some(self.planner.job_done(out, t));
-                }
-                Work::Load(buffer) => {
-                    if let Some(l) = self.load.as_mut() {
-                        l.done(buffer);
-                    }
-                }
-            }
-        }
+        let mut step = round.map(|out| self.planner.job_done(out, t));
         if step.is_none() && self.pending.is_none() && !self.job_outstanding {
             let nav: &OccupancyGrid = self.nav.as_deref().unwrap_or(&self.empty_grid);
             let explore: &OccupancyGrid = self.explore.as_deref().unwrap_or(&self.empty_grid);
