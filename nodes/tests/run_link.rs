@@ -544,6 +544,22 @@ fn a_cut_link_is_counted_and_traffic_resumes() {
         "{so_b}"
     );
     let lost = row(&so_b, "link: robot/state samples lost across the link").unwrap_or(0.0);
+    // The figures (`--nocapture`): the gap as logged, what each side counted.
+    for l in se_b
+        .lines()
+        .filter(|l| l.contains("the other host is back after"))
+    {
+        eprintln!("cut link, station: {l}");
+    }
+    for l in so_b.lines().filter(|l| l.starts_with("| link: ")) {
+        eprintln!("cut link, station: {l}");
+    }
+    for l in so_a
+        .lines()
+        .filter(|l| l.starts_with("| ") && (l.contains("link: times") || l.contains("LBV")))
+    {
+        eprintln!("cut link, robot: {l}");
+    }
     assert!(lost > 0.0, "no robot/state samples counted lost:\n{so_b}");
     assert!(so_b.contains("| end | planner"), "station:\n{so_b}\n{se_b}");
     // Depth frames crossed at most DEPTH_HZ a second (wall time: fewer frames on a slow
