@@ -282,7 +282,7 @@ fn recorder_across_the_link_records_what_the_robot_published() {
         // more: the robot's recorder stops with the sim, the tunnel after it).
         assert!(
             nb >= na,
-            "{t}: station {nb} < robot {na}\n{ia}\n{ib}\n{se_b}"
+            "{t}: station {nb} < robot {na}\n{ia}\n{ib}\n{se_b}\nstation's summary:\n{so_b}"
         );
         // ... and none twice (a loop through the tunnel would double them).
         assert!(
