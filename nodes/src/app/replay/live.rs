@@ -345,7 +345,7 @@ where
                 name(got.receipts.get(k))
             ));
         }
-        self.stats.objects += cuboids(want).len() as u64;
+        self.stats.objects += want.entities.iter().filter(|e| !e.cubes.is_empty()).count() as u64;
         let got = convert::map_objects(map);
         if got == *want {
             Ok(())
@@ -474,7 +474,10 @@ impl<'a> Cycles<'a> {
                     .nav_grids
                     .get(&seq)
                     .ok_or_else(|| format!("the trace lacks navigation grid {seq}"))?;
-                grid_of(g, &mut self.nav_grid)?;
+                // The grid changes rarely: decode it once per seq, not every cycle.
+                if self.nav_grid.header.seq != seq {
+                    grid_of(g, &mut self.nav_grid)?;
+                }
                 &*self.nav_grid
             }
         };
