@@ -88,7 +88,7 @@ fn vpsom_path(e: &E2eSettings) -> Result<PathBuf> {
         Ok(p)
     } else {
         bail!(
-            "no vpsom binary at {} (build it with `cargo build --release -p nodes` or pass --vpsom PATH)",
+            "no vpsom binary at {} (build it with `cargo build --release -p vpsom` or pass --vpsom PATH)",
             p.display()
         )
     }
@@ -166,7 +166,7 @@ pub fn run(
     let (ports, lbv_priority) = if fake || e.pipeline_config.is_empty() {
         (PortsConfig::default(), ExecutorConfig::default().priority)
     } else {
-        let c = nodes::config::Config::load(Path::new(&e.pipeline_config))
+        let c = vpsom::config::Config::load(Path::new(&e.pipeline_config))
             .with_context(|| format!("load {}", e.pipeline_config))?;
         (c.ports, c.executor.priority)
     };

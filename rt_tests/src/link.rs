@@ -20,7 +20,6 @@ use crate::settings::IpcSettings;
 use crate::stats::{Stats, ratio, table_header, table_row};
 use anyhow::{Context, Result, anyhow, bail};
 use iceoryx2::prelude::*;
-use nodes::app::deploy::link::{open_link, parse_endpoint, zenoh_config};
 use runtime::clock::{Clock, MonotonicClock};
 use runtime::ports::{Overflow, PortContext, PortsConfig, Stamp};
 use serde::Serialize;
@@ -31,6 +30,7 @@ use std::process::{Child, Command, Stdio};
 use std::sync::Arc;
 use std::sync::atomic::{AtomicBool, Ordering};
 use std::time::{Duration, Instant};
+use vpsom::deploy::link::{open_link, parse_endpoint, zenoh_config};
 use zenoh::Wait;
 
 /// Topic of every case.

@@ -303,7 +303,7 @@ fn main() -> std::process::ExitCode {
     match real_main() {
         Ok(code) => code,
         Err(e) => {
-            eprintln!("vpsom-rt-tests: error: {}", nodes::app::error_report(&e));
+            eprintln!("vpsom-rt-tests: error: {}", vpsom::error_report(&e));
             std::process::ExitCode::from(1)
         }
     }

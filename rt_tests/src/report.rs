@@ -12,7 +12,7 @@ use std::io::BufWriter;
 use std::path::{Path, PathBuf};
 use std::sync::OnceLock;
 
-const FONT_BYTES: &[u8] = include_bytes!("../../nodes/assets/DejaVuSans.ttf");
+const FONT_BYTES: &[u8] = include_bytes!("../../nodes/eval/assets/DejaVuSans.ttf");
 const FONT: &str = "sans-serif";
 
 /// A budget compared with a measured value.

@@ -1194,7 +1194,7 @@ pub struct ObjectVisibility {
 
 /// Per rendered frame, the visibility of every ground-truth foreground object in the camera's
 /// view (`sim/visibility`, evaluation only; which objects count is the simulator's
-/// `Sim::visibility`, the metric is `nodes::eval::occlusion`).
+/// `Sim::visibility`, the metric is `vpsom::eval::occlusion`).
 #[derive(Debug, Clone, Copy, ZeroCopySend, bytemuck::Zeroable)]
 #[repr(C)]
 #[type_name("vpsom::FrameVisibility")]

@@ -105,7 +105,7 @@ fn f3(a: [f32; 3]) -> DVec3 {
 }
 
 /// Axes `(right, down, forward)` of an optical camera whose forward axis has yaw `yaw` and is
-/// pitched down by `pitch` (same convention as `nodes::geom::optical_rotation`).
+/// pitched down by `pitch` (same convention as `geom::optical_rotation`).
 pub fn optical_axes(yaw: f64, pitch: f64) -> (DVec3, DVec3, DVec3) {
     let (sy, cy) = yaw.sin_cos();
     let (sp, cp) = pitch.sin_cos();

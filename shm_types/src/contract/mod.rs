@@ -216,7 +216,7 @@ pub struct Topic {
     pub doc: &'static str,
 }
 
-/// Every topic of a run, in the order of `nodes::app::topics`.
+/// Every topic of a run, in the order of `vpsom::topics`.
 pub fn topics() -> &'static [Topic] {
     describe::TOPICS
 }

@@ -1,0 +1,528 @@
+//! `[planner]` configuration: one struct per nested table, defaults from `config/default.toml`.
+
+use serde::Deserialize;
+use settings::{Checker, ConfigError};
+use std::fmt;
+use std::str::FromStr;
+
+/// Which view planner drives the robot (`--planner vpsom|coverage|frontier`).
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Deserialize)]
+#[serde(rename_all = "lowercase")]
+pub enum PlannerKind {
+    /// VP-SOM (paper sections 3–5): GBV on the chassis, LBV on the neck.
+    Vpsom,
+    /// All-views coverage: a full circle around every cluster, camera on the cluster centre.
+    Coverage,
+    /// Frontier exploration (Yamauchi 1997), neck fixed forward.
+    Frontier,
+}
+
+impl PlannerKind {
+    /// The name used on the command line and in `metrics.json`.
+    pub fn name(self) -> &'static str {
+        match self {
+            PlannerKind::Vpsom => "vpsom",
+            PlannerKind::Coverage => "coverage",
+            PlannerKind::Frontier => "frontier",
+        }
+    }
+}
+
+impl fmt::Display for PlannerKind {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        f.write_str(self.name())
+    }
+}
+
+/// An unknown planner name.
+#[derive(Debug, Clone, PartialEq, Eq, thiserror::Error)]
+#[error("unknown planner `{0}` (expected vpsom, coverage or frontier)")]
+pub struct UnknownPlanner(pub String);
+
+impl FromStr for PlannerKind {
+    type Err = UnknownPlanner;
+    fn from_str(s: &str) -> Result<Self, Self::Err> {
+        match s {
+            "vpsom" => Ok(PlannerKind::Vpsom),
+            "coverage" => Ok(PlannerKind::Coverage),
+            "frontier" => Ok(PlannerKind::Frontier),
+            other => Err(UnknownPlanner(other.to_string())),
+        }
+    }
+}
+
+/// Which foreground objects count as occluders of `fo_i` in H_IoU (eq. 21).
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Deserialize)]
+#[serde(rename_all = "lowercase")]
+pub enum Occluders {
+    /// Every other foreground object whose box projects into the image (the paper's `Σ_{j≠i}`):
+    /// two overlapping boxes penalise both objects.
+    All,
+    /// Only objects whose centre is closer to the camera (along the optical axis) than `fo_i`'s
+    /// centre: physically, only those can hide it.
+    Closer,
+}
+
+/// Which foreground objects f_a (eq. 3) sums over, among those in the view's frustum.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Deserialize)]
+#[serde(rename_all = "lowercase")]
+pub enum FaRelevance {
+    /// Only the objects of the cluster the view is evaluated for (the GBV's target cluster);
+    /// without a target, every object in the frustum.
+    Cluster,
+    /// Only objects whose centre lies within `fa_radius` of the camera (the public reference
+    /// code counts objects within 1.5 m of the view).
+    Radius,
+    /// Every foreground object in the frustum and sensing range, of any cluster and state.
+    Frustum,
+}
+
+/// Term switches for ablation studies. A disabled multiplicative factor (cos θ_sopm, C_asso,
+/// N_cp, cos θ_c) is replaced by 1; a disabled additive term (H_sopm, H_IoU) by 0.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct AblationConfig {
+    /// Model uncertainty H_sopm in f_a (additive).
+    pub h_sopm: bool,
+    /// Non-occlusion H_IoU in f_a (additive).
+    pub h_iou: bool,
+    /// cos θ_sopm in f_a (multiplicative).
+    pub theta_sopm: bool,
+    /// C_asso in f_a (multiplicative).
+    pub c_asso: bool,
+    /// N_cp in f_c (multiplicative).
+    pub n_cp: bool,
+    /// cos θ_c in f_c (multiplicative).
+    pub theta_c: bool,
+}
+
+impl Default for AblationConfig {
+    /// The `[planner.ablation]` section of the built-in `config/default.toml`.
+    fn default() -> Self {
+        settings::DEFAULTS.section("planner.ablation")
+    }
+}
+
+impl AblationConfig {
+    /// Names of the switchable terms, as used in config keys and ablation labels
+    /// (`vpsom-no-<term>`).
+    pub const TERMS: [&'static str; 6] =
+        ["h_sopm", "h_iou", "theta_sopm", "c_asso", "n_cp", "theta_c"];
+
+    /// Switch one term off by name.
+    pub fn disable(&mut self, term: &str) -> Result<(), UnknownTerm> {
+        let flag = match term {
+            "h_sopm" => &mut self.h_sopm,
+            "h_iou" => &mut self.h_iou,
+            "theta_sopm" => &mut self.theta_sopm,
+            "c_asso" => &mut self.c_asso,
+            "n_cp" => &mut self.n_cp,
+            "theta_c" => &mut self.theta_c,
+            other => return Err(UnknownTerm(other.to_string())),
+        };
+        *flag = false;
+        Ok(())
+    }
+}
+
+/// A term name that is not one of [`AblationConfig::TERMS`].
+#[derive(Debug, Clone, PartialEq, Eq, thiserror::Error)]
+#[error(
+    "unknown F(v) term {0:?} (expected one of h_sopm, h_iou, theta_sopm, c_asso, n_cp, theta_c)"
+)]
+pub struct UnknownTerm(pub String);
+
+/// `[planner.gbv]`: global best view.
+#[derive(Debug, Clone, Copy, PartialEq, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct GbvConfig {
+    /// Candidates N sampled on a ring around the cluster.
+    pub candidates: usize,
+    /// Weight α of f_a.
+    pub alpha: f32,
+    /// Weight β of f_c.
+    pub beta: f32,
+    /// Clearance between the cluster's footprint (bounding circle) and the ring, metres.
+    pub safe_distance: f32,
+    /// GBV rounds spent on one cluster before it is given up (guarantees termination).
+    pub max_rounds_per_cluster: u32,
+    /// Candidates of a cluster within this distance of one of its earlier GBV goals (reached or
+    /// refused) are dropped, so that every round moves the base to a new view, metres.
+    pub revisit_radius: f32,
+    /// Score each candidate base pose at the neck yaw the LBV will choose there (false: neck 0,
+    /// the camera on the cluster centre).
+    pub neck_aware: bool,
+    /// Travel cost of a candidate: it is chosen by `F(v) / F_max − distance_weight × path`
+    /// (path on the navigation grid from the robot, metres; F_max the round's best F), so a view
+    /// `1 / distance_weight` metres further must be twice as informative. 0: F(v) alone.
+    pub distance_weight: f32,
+    /// GBV rounds a cluster that ended (out of rounds or views) gets again when a new unfinished
+    /// foreground object appears in it (0: an ended cluster never reopens).
+    pub reopen_rounds: u32,
+    /// How many times one cluster may reopen (bounds the session).
+    pub max_reopens: u32,
+}
+
+impl Default for GbvConfig {
+    /// The `[planner.gbv]` section of the built-in `config/default.toml`.
+    fn default() -> Self {
+        settings::DEFAULTS.section("planner.gbv")
+    }
+}
+
+/// `[planner.lbv]`: local best view (neck).
+#[derive(Debug, Clone, Copy, PartialEq, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct LbvConfig {
+    /// Candidates M spread evenly over the neck range.
+    pub candidates: usize,
+    /// Weight α of f_a (0 in the paper: LBV depends on continuity only).
+    pub alpha: f32,
+    /// Weight β of f_c.
+    pub beta: f32,
+    /// Lower end of the neck yaw range relative to the base, degrees.
+    pub neck_min_deg: f32,
+    /// Upper end of the neck yaw range, degrees (a 360° range does not repeat its end point).
+    pub neck_max_deg: f32,
+}
+
+impl Default for LbvConfig {
+    /// The `[planner.lbv]` section of the built-in `config/default.toml`.
+    fn default() -> Self {
+        settings::DEFAULTS.section("planner.lbv")
+    }
+}
+
+/// `[planner.bootstrap]`: behaviour before a cluster is known, and for clusters without
+/// foreground objects.
+#[derive(Debug, Clone, Copy, PartialEq, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct BootstrapConfig {
+    /// Neck stops of the in-place look-around sweep (evenly over 360°).
+    pub look_around_steps: usize,
+    /// A neck stop counts as reached within this yaw error, degrees.
+    pub neck_tolerance_deg: f32,
+    /// Angular sectors around a cluster (for the "looked at from enough sides" rule).
+    pub sectors: usize,
+    /// A cluster with no foreground object yet is done once its centre was in view from this
+    /// many distinct sectors.
+    pub empty_cluster_sectors: usize,
+    /// No cluster is done before it was in view from within this distance of its support's
+    /// footprint circle, metres (`inf`: the rule off); see `planner::clusters`.
+    pub approach_m: f32,
+    /// While exploring (the base driving to frontiers) the neck sweeps
+    /// `amplitude · sin(2π t / period)` about the base's heading: amplitude, degrees.
+    pub explore_neck_amplitude_deg: f32,
+    /// Period of that sweep, seconds (peak neck rate 2π · amplitude / period).
+    pub explore_neck_period_s: f32,
+}
+
+impl Default for BootstrapConfig {
+    /// The `[planner.bootstrap]` section of the built-in `config/default.toml`.
+    fn default() -> Self {
+        settings::DEFAULTS.section("planner.bootstrap")
+    }
+}
+
+/// `[planner.coverage]`: all-views coverage baseline.
+#[derive(Debug, Clone, Copy, PartialEq, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct CoverageConfig {
+    /// Waypoints on the full circle around each cluster.
+    pub waypoints: usize,
+}
+
+impl Default for CoverageConfig {
+    /// The `[planner.coverage]` section of the built-in `config/default.toml`.
+    fn default() -> Self {
+        settings::DEFAULTS.section("planner.coverage")
+    }
+}
+
+/// `[planner.frontier]`: frontier-exploration baseline (also VP-SOM's bootstrap exploration).
+#[derive(Debug, Clone, Copy, PartialEq, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct FrontierConfig {
+    /// Frontier clusters with fewer cells are ignored (noise).
+    pub min_cells: usize,
+    /// Frontier cells within this distance of an earlier frontier goal are ignored, metres
+    /// (a frontier that survives a visit cannot be cleared from there).
+    pub blacklist_radius: f32,
+    /// Information weight: a frontier's length (metres of frontier cells) counts as this many
+    /// metres less path, so that large frontiers win over slightly nearer small ones.
+    pub gain_weight: f32,
+    /// Unknown regions smaller than this make no frontier, m² (0: all do).
+    pub min_unknown_area_m2: f32,
+    /// Only UNKNOWN cells the base can reach (finite path on the inflated navigation grid) make
+    /// frontiers.
+    pub reachable_unknown: bool,
+    /// A frontier goal being driven to is dropped (a new round chooses the next) once no
+    /// frontier cell is left within this distance of it, metres (0: always driven to the end).
+    pub seen_radius: f32,
+}
+
+impl Default for FrontierConfig {
+    /// The `[planner.frontier]` section of the built-in `config/default.toml`.
+    fn default() -> Self {
+        settings::DEFAULTS.section("planner.frontier")
+    }
+}
+
+/// `[planner.give_up]`: when VP-SOM gives up an object whose entropy stops falling (see
+/// [`crate::giveup`]).
+#[derive(Debug, Clone, Copy, PartialEq, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct GiveUpConfig {
+    /// Rounds N (GBV rounds aimed at the object's cluster that observed it) over which its
+    /// H_sopm must fall by `min_drop`.
+    pub rounds: usize,
+    /// Least fall δ of H_sopm over `rounds` rounds.
+    pub min_drop: f32,
+}
+
+impl Default for GiveUpConfig {
+    /// The `[planner.give_up]` section of the built-in `config/default.toml`.
+    fn default() -> Self {
+        settings::DEFAULTS.section("planner.give_up")
+    }
+}
+
+/// `[planner]` section.
+#[derive(Debug, Clone, PartialEq, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct PlannerConfig {
+    /// `vpsom`, `coverage` or `frontier`.
+    pub kind: PlannerKind,
+    /// LBV rate of the planner's real-time thread, Hz.
+    pub lbv_hz: f64,
+    /// Execution budget of one LBV cycle, ms.
+    pub lbv_budget_ms: f64,
+    /// A foreground object is complete when H_sopm < ε_sopm (section 3.4).
+    pub eps_sopm: f32,
+    /// ε_cp of eq. (22): co-visible points at which N_cp saturates at 1.
+    pub eps_cp: f32,
+    /// θ_thresh of section 5.1: largest co-visibility angle, degrees.
+    pub theta_thresh_deg: f32,
+    /// Occluders in H_IoU.
+    pub occluders: Occluders,
+    /// Which objects in the frustum f_a counts.
+    pub fa_relevance: FaRelevance,
+    /// Radius of [`FaRelevance::Radius`] around the camera, metres.
+    pub fa_radius: f32,
+    /// Whether an object counts as in view only if it is not hidden (ray casts against the map's
+    /// cuboids and, for the GBV, the wall cells of the navigation grid).
+    pub fa_occlusion: bool,
+    /// Least fraction of an object's sample points (centre and 8 inner corners) a view must see
+    /// unhidden for the object to count as in view.
+    pub fa_min_visible: f32,
+    /// Occupied navigation-grid cells this far beyond a map object's estimated footprint (and the
+    /// grid's inflation) are taken for that object, not for a wall, metres.
+    pub fa_wall_slack: f32,
+    /// Robot footprint radius for collision and reachability, metres.
+    pub robot_radius: f32,
+    /// Whether UNKNOWN cells of the navigation grid may be driven through.
+    pub nav_unknown_traversable: bool,
+    /// Whether the navigation grid's obstacles are already inflated by the robot radius (a
+    /// configuration-space map, as the simulator's pre-built map is); if false the planner
+    /// inflates them by `robot_radius` itself.
+    pub nav_inflated: bool,
+    /// VP-SOM: a map object (foreground or background) with fewer associated detections is not
+    /// yet trusted: it neither opens a cluster nor holds the session open (detector false
+    /// positives are seen in one or two frames).
+    pub min_observations: u32,
+    /// Global best view.
+    pub gbv: GbvConfig,
+    /// Local best view.
+    pub lbv: LbvConfig,
+    /// Bootstrap and empty clusters.
+    pub bootstrap: BootstrapConfig,
+    /// Coverage baseline.
+    pub coverage: CoverageConfig,
+    /// Frontier baseline (and every planner's exploration).
+    pub frontier: FrontierConfig,
+    /// Giving up objects whose entropy stops falling.
+    pub give_up: GiveUpConfig,
+    /// Term switches.
+    pub ablation: AblationConfig,
+}
+
+impl Default for PlannerConfig {
+    /// The `[planner]` section of the built-in `config/default.toml`.
+    fn default() -> Self {
+        settings::DEFAULTS.section("planner")
+    }
+}
+
+impl PlannerConfig {
+    /// Range-check.
+    pub fn validate(&self, c: &Checker) -> Result<(), ConfigError> {
+        c.in_range("planner.lbv_hz", self.lbv_hz, 0.1, 1000.0)?;
+        c.positive("planner.lbv_budget_ms", self.lbv_budget_ms)?;
+        c.require(
+            self.lbv_budget_ms <= 1000.0 / self.lbv_hz,
+            "planner.lbv_budget_ms",
+            self.lbv_budget_ms,
+            "must not exceed the LBV period 1000 / planner.lbv_hz",
+        )?;
+        c.in_range("planner.eps_sopm", self.eps_sopm.into(), 0.0, 1.0)?;
+        c.in_range("planner.eps_cp", self.eps_cp.into(), 1.0, 1e6)?;
+        c.in_range(
+            "planner.theta_thresh_deg",
+            self.theta_thresh_deg.into(),
+            0.1,
+            180.0,
+        )?;
+        c.in_range("planner.robot_radius", self.robot_radius.into(), 0.0, 2.0)?;
+        c.in_range("planner.fa_radius", self.fa_radius.into(), 0.01, 100.0)?;
+        c.in_range(
+            "planner.fa_wall_slack",
+            self.fa_wall_slack.into(),
+            0.0,
+            100.0,
+        )?;
+        c.in_range(
+            "planner.fa_min_visible",
+            self.fa_min_visible.into(),
+            0.0,
+            1.0,
+        )?;
+        let g = &self.gbv;
+        c.count("planner.gbv.candidates", g.candidates, 1, 100_000)?;
+        c.in_range("planner.gbv.alpha", g.alpha.into(), 0.0, 100.0)?;
+        c.in_range("planner.gbv.beta", g.beta.into(), 0.0, 100.0)?;
+        c.in_range(
+            "planner.gbv.safe_distance",
+            g.safe_distance.into(),
+            0.0,
+            10.0,
+        )?;
+        c.count(
+            "planner.gbv.max_rounds_per_cluster",
+            g.max_rounds_per_cluster as usize,
+            1,
+            10_000,
+        )?;
+        c.in_range(
+            "planner.gbv.revisit_radius",
+            g.revisit_radius.into(),
+            0.0,
+            10.0,
+        )?;
+        c.in_range(
+            "planner.gbv.distance_weight",
+            g.distance_weight.into(),
+            0.0,
+            10.0,
+        )?;
+        c.count(
+            "planner.gbv.reopen_rounds",
+            g.reopen_rounds as usize,
+            0,
+            1000,
+        )?;
+        c.count("planner.gbv.max_reopens", g.max_reopens as usize, 0, 100)?;
+        c.count(
+            "planner.min_observations",
+            self.min_observations as usize,
+            0,
+            1_000_000,
+        )?;
+        let l = &self.lbv;
+        c.count("planner.lbv.candidates", l.candidates, 1, 100_000)?;
+        c.in_range("planner.lbv.alpha", l.alpha.into(), 0.0, 100.0)?;
+        c.in_range("planner.lbv.beta", l.beta.into(), 0.0, 100.0)?;
+        c.in_range(
+            "planner.lbv.neck_min_deg",
+            l.neck_min_deg.into(),
+            -180.0,
+            180.0,
+        )?;
+        c.require(
+            l.neck_max_deg >= l.neck_min_deg && l.neck_max_deg <= 180.0,
+            "planner.lbv.neck_max_deg",
+            l.neck_max_deg,
+            "must be in [planner.lbv.neck_min_deg, 180]",
+        )?;
+        let b = &self.bootstrap;
+        c.count(
+            "planner.bootstrap.look_around_steps",
+            b.look_around_steps,
+            1,
+            360,
+        )?;
+        c.in_range(
+            "planner.bootstrap.neck_tolerance_deg",
+            b.neck_tolerance_deg.into(),
+            0.1,
+            90.0,
+        )?;
+        c.count("planner.bootstrap.sectors", b.sectors, 1, 64)?;
+        c.count(
+            "planner.bootstrap.empty_cluster_sectors",
+            b.empty_cluster_sectors,
+            0,
+            b.sectors,
+        )?;
+        c.require(
+            b.approach_m > 0.0,
+            "planner.bootstrap.approach_m",
+            b.approach_m,
+            "must be > 0 (inf: the rule off)",
+        )?;
+        c.in_range(
+            "planner.bootstrap.explore_neck_amplitude_deg",
+            b.explore_neck_amplitude_deg.into(),
+            0.0,
+            180.0,
+        )?;
+        c.in_range(
+            "planner.bootstrap.explore_neck_period_s",
+            b.explore_neck_period_s.into(),
+            0.1,
+            1000.0,
+        )?;
+        c.count(
+            "planner.coverage.waypoints",
+            self.coverage.waypoints,
+            3,
+            10_000,
+        )?;
+        c.count(
+            "planner.frontier.min_cells",
+            self.frontier.min_cells,
+            1,
+            100_000,
+        )?;
+        c.in_range(
+            "planner.frontier.blacklist_radius",
+            self.frontier.blacklist_radius.into(),
+            0.0,
+            10.0,
+        )?;
+        c.in_range(
+            "planner.frontier.gain_weight",
+            self.frontier.gain_weight.into(),
+            0.0,
+            100.0,
+        )?;
+        c.in_range(
+            "planner.frontier.min_unknown_area_m2",
+            self.frontier.min_unknown_area_m2.into(),
+            0.0,
+            100.0,
+        )?;
+        c.in_range(
+            "planner.frontier.seen_radius",
+            self.frontier.seen_radius.into(),
+            0.0,
+            10.0,
+        )?;
+        c.count("planner.give_up.rounds", self.give_up.rounds, 1, 1000)?;
+        c.in_range(
+            "planner.give_up.min_drop",
+            self.give_up.min_drop.into(),
+            0.0,
+            1.0,
+        )
+    }
+}

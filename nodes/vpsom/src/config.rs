@@ -1,0 +1,496 @@
+//! The whole configuration of a session: one typed struct per `config/default.toml` section.
+//!
+//! Every default is stated once, in `config/default.toml` (built in as [`DEFAULT_TOML`]): a file is
+//! deep-merged over it, key by key, and the merged table is deserialised into these structs
+//! (`deny_unknown_fields`, no `#[serde(default)]`), so a file sets only the keys it changes and an
+//! unknown key is an error naming the file and the key. Each section's `Default` is its section
+//! of the built-in file ([`settings::Defaults::section`]); each has a
+//! `validate(&self, &Checker)` that range-checks it.
+
+pub use geom::CameraConfig;
+use serde::Deserialize;
+use settings::{Checker, ConfigError};
+use std::path::{Path, PathBuf};
+
+/// The shipped defaults, built into the binary so it runs from any directory, and their path
+/// relative to the repository root.
+pub use settings::{DEFAULT_PATH, DEFAULT_TOML};
+
+/// All sections of a configuration file.
+#[derive(Debug, Clone, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct Config {
+    /// Depth camera and mount.
+    pub camera: CameraConfig,
+    /// Node rates.
+    pub rates: RatesConfig,
+    /// Periodic executor defaults (scheduling, spin margin, miss policy).
+    pub executor: runtime::executor::ExecutorConfig,
+    /// iceoryx2 service settings.
+    pub ports: runtime::ports::PortsConfig,
+    /// World simulation (noise, seed).
+    pub sim: sim::SimConfig,
+    /// Simulated detector.
+    pub detector: sim::DetectorConfig,
+    /// Simulated base and neck.
+    pub robot: sim::RobotConfig,
+    /// Sparse object mapping and SOPM.
+    pub mapper: mapper::MapperConfig,
+    /// View planning (VP-SOM and baselines).
+    pub planner: planner::PlannerConfig,
+    /// `vpsom run` (deployment host) settings.
+    pub run: RunConfig,
+    /// `vpsom bench` (lockstep experiments) settings.
+    pub bench: BenchConfig,
+    /// `vpsom sensing` (sensing report) settings.
+    pub sensing: SensingConfig,
+    /// Scene generator (`vpsom scene gen`, `vpsom bench --generated`).
+    pub scenegen: sim::scenegen::SceneGenConfig,
+    /// MCAP recorder.
+    pub recorder: runtime::recorder::RecorderConfig,
+    /// `vpsom run --link`: the tunnel to another host.
+    pub link: LinkConfig,
+}
+
+/// Fixed rates of the deployment host (simulated seconds).
+#[derive(Debug, Clone, Copy, PartialEq, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct RatesConfig {
+    /// Depth frames and detections, Hz (paper: 20–30).
+    pub camera_hz: f64,
+    /// Robot state, Hz.
+    pub state_hz: f64,
+    /// Object map publication, Hz.
+    pub map_hz: f64,
+}
+
+impl Default for RatesConfig {
+    /// The `[rates]` section of the built-in `config/default.toml`.
+    fn default() -> Self {
+        settings::DEFAULTS.section("rates")
+    }
+}
+
+impl RatesConfig {
+    fn validate(&self, c: &Checker) -> Result<(), ConfigError> {
+        c.in_range("rates.camera_hz", self.camera_hz, 0.1, 120.0)?;
+        c.in_range("rates.state_hz", self.state_hz, 0.1, 1000.0)?;
+        c.in_range("rates.map_hz", self.map_hz, 0.1, 120.0)
+    }
+}
+
+/// `[run]`: the deployment host (`vpsom run`).
+#[derive(Debug, Clone, Copy, PartialEq, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct RunConfig {
+    /// Simulated seconds per wall second (a real robot runs at 1).
+    pub time_scale: f64,
+    /// Camera width used by `vpsom run` (overrides `camera.width`; 0 = keep it).
+    pub camera_width: u32,
+    /// Camera height used by `vpsom run` (overrides `camera.height`; 0 = keep it).
+    pub camera_height: u32,
+    /// Give up after this much simulated time, seconds.
+    pub max_sim_s: f64,
+    /// Restarts allowed per node process after a crash.
+    pub max_restarts: u32,
+    /// Grace period for nodes to exit after SIGINT before SIGKILL, seconds.
+    pub stop_grace_s: f64,
+    /// `SCHED_FIFO` priority of the mapper's thread (below the LBV's `executor.priority`, so
+    /// depth frames become maps promptly under CPU load); 0 = `SCHED_OTHER`.
+    pub mapper_priority: i32,
+    /// CPU the planner's LBV thread is pinned to (-1 = `executor.cpus`).
+    pub lbv_cpu: i32,
+    /// CPU of the LBV thread's backup waker (`executor.backup_cpu`; -1 = none): wakes the LBV
+    /// there when its own CPU stalls at a release. Needs `lbv_cpu`, a different CPU.
+    pub lbv_backup_cpu: i32,
+    /// Rate of every node's heartbeat (`NodeHealth` on the `health` topic), wall Hz.
+    pub health_hz: f64,
+    /// A running node silent for longer than this is hung: killed and restarted, wall s.
+    pub hang_timeout_s: f64,
+    /// Longest wait for a (re)started node's first heartbeat before it counts as hung, wall s.
+    pub start_timeout_s: f64,
+    /// A restarted mapper resumes from the last map it published (the launcher hands its
+    /// newest copy over on `map/resume`); `false` = it starts empty.
+    pub resume_map: bool,
+}
+
+impl Default for RunConfig {
+    /// The `[run]` section of the built-in `config/default.toml`.
+    fn default() -> Self {
+        settings::DEFAULTS.section("run")
+    }
+}
+
+impl RunConfig {
+    fn validate(&self, c: &Checker) -> Result<(), ConfigError> {
+        c.in_range("run.time_scale", self.time_scale, 0.01, 100.0)?;
+        c.count(
+            "run.camera_width",
+            self.camera_width as usize,
+            0,
+            shm_types::MAX_WIDTH,
+        )?;
+        c.count(
+            "run.camera_height",
+            self.camera_height as usize,
+            0,
+            shm_types::MAX_HEIGHT,
+        )?;
+        c.in_range("run.max_sim_s", self.max_sim_s, 1.0, 86_400.0)?;
+        c.count("run.max_restarts", self.max_restarts as usize, 0, 100)?;
+        c.require(
+            (0..=98).contains(&self.mapper_priority),
+            "run.mapper_priority",
+            self.mapper_priority,
+            "must be in [0, 98] (0 = SCHED_OTHER)",
+        )?;
+        for (key, v) in [
+            ("run.lbv_cpu", self.lbv_cpu),
+            ("run.lbv_backup_cpu", self.lbv_backup_cpu),
+        ] {
+            c.require(
+                (-1..1024).contains(&v),
+                key,
+                v,
+                "must be a CPU index below 1024, or -1",
+            )?;
+        }
+        c.require(
+            self.lbv_backup_cpu < 0 || (self.lbv_cpu >= 0 && self.lbv_cpu != self.lbv_backup_cpu),
+            "run.lbv_backup_cpu",
+            self.lbv_backup_cpu,
+            "needs run.lbv_cpu set to another CPU",
+        )?;
+        c.in_range("run.health_hz", self.health_hz, 0.5, 100.0)?;
+        c.in_range("run.hang_timeout_s", self.hang_timeout_s, 0.5, 3600.0)?;
+        c.in_range("run.start_timeout_s", self.start_timeout_s, 1.0, 3600.0)?;
+        c.require(
+            self.hang_timeout_s * self.health_hz >= 2.0,
+            "run.hang_timeout_s",
+            self.hang_timeout_s,
+            "must span at least two heartbeats (run.health_hz)",
+        )?;
+        c.in_range("run.stop_grace_s", self.stop_grace_s, 0.1, 600.0)
+    }
+}
+
+/// `[link]`: the tunnel to another host (`vpsom run --link`, iceoryx2's link tunnel over
+/// zenoh); see `nodes/vpsom/src/deploy/link/`.
+#[derive(Debug, Clone, PartialEq, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct LinkConfig {
+    /// zenoh configuration file (JSON5; endpoints, TLS, access control), "" = the built-in
+    /// one. `--zenoh-config` overrides it.
+    pub zenoh_config: String,
+    /// The tunnel thread wakes at least this often (ms), besides on data.
+    pub poll_ms: u64,
+    /// Before starting its nodes, wait up to this long (s) for the other host's tunnel to
+    /// bridge every topic; 0 = start at once.
+    pub wait_for_peer_s: f64,
+    /// At the end of a run, wait until no sample has come over the link for this long (ms)
+    /// before stopping the nodes, so the other host's last samples are recorded here.
+    pub quiet_ms: u64,
+    /// Cap on that wait (s).
+    pub drain_s: f64,
+    /// After the nodes stopped, keep the tunnel up this long (ms) so their last samples leave.
+    pub linger_ms: u64,
+    /// Samples the tunnel's own subscribers buffer per small topic (see `link::watch`).
+    pub buffer: usize,
+    /// Per-topic rate limit across the link (Hz, 0 = every sample), for the large topics
+    /// (`depth`, `map`).
+    pub max_hz: std::collections::BTreeMap<String, f64>,
+}
+
+/// Topics `[link.max_hz]` may limit: the large ones, which cross through a relay.
+pub const LINK_LIMITABLE: [&str; 2] = ["depth", "map"];
+
+impl Default for LinkConfig {
+    /// The `[link]` section of the built-in `config/default.toml`.
+    fn default() -> Self {
+        settings::DEFAULTS.section("link")
+    }
+}
+
+impl LinkConfig {
+    fn validate(&self, c: &Checker) -> Result<(), ConfigError> {
+        c.count("link.poll_ms", self.poll_ms as usize, 1, 10_000)?;
+        c.in_range("link.wait_for_peer_s", self.wait_for_peer_s, 0.0, 86_400.0)?;
+        c.count("link.quiet_ms", self.quiet_ms as usize, 1, 600_000)?;
+        c.in_range("link.drain_s", self.drain_s, 0.0, 600.0)?;
+        c.count("link.linger_ms", self.linger_ms as usize, 0, 600_000)?;
+        c.count("link.buffer", self.buffer, 1, 256)?;
+        for (topic, &hz) in &self.max_hz {
+            c.require(
+                LINK_LIMITABLE.contains(&topic.as_str()),
+                "link.max_hz",
+                topic,
+                "only depth and map can be rate-limited",
+            )?;
+            c.in_range(&format!("link.max_hz.{topic}"), hz, 0.0, 1000.0)?;
+        }
+        Ok(())
+    }
+}
+
+/// `[bench]`: the lockstep experiments (`vpsom bench`).
+#[derive(Debug, Clone, Copy, PartialEq, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct BenchConfig {
+    /// Camera width in the experiments (0 = keep `camera.width`).
+    pub camera_width: u32,
+    /// Camera height in the experiments (0 = keep `camera.height`).
+    pub camera_height: u32,
+    /// Camera rate in the experiments, Hz (0 = keep `rates.camera_hz`).
+    pub camera_hz: f64,
+    /// Give up a session after this much simulated time, seconds.
+    pub max_sim_s: f64,
+    /// Seeds per scene and planner.
+    pub seeds: u64,
+    /// Sessions run at once (0 = one per CPU).
+    pub jobs: usize,
+}
+
+impl Default for BenchConfig {
+    /// The `[bench]` section of the built-in `config/default.toml`.
+    fn default() -> Self {
+        settings::DEFAULTS.section("bench")
+    }
+}
+
+impl BenchConfig {
+    fn validate(&self, c: &Checker) -> Result<(), ConfigError> {
+        c.count(
+            "bench.camera_width",
+            self.camera_width as usize,
+            0,
+            shm_types::MAX_WIDTH,
+        )?;
+        c.count(
+            "bench.camera_height",
+            self.camera_height as usize,
+            0,
+            shm_types::MAX_HEIGHT,
+        )?;
+        c.in_range("bench.camera_hz", self.camera_hz, 0.0, 120.0)?;
+        c.in_range("bench.max_sim_s", self.max_sim_s, 1.0, 86_400.0)?;
+        c.count("bench.seeds", self.seeds as usize, 1, 1000)?;
+        c.count("bench.jobs", self.jobs, 0, 256)
+    }
+}
+
+/// `[sensing]`: the scripted tour of the sensing report (`vpsom sensing`).
+#[derive(Debug, Clone, Copy, PartialEq, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct SensingConfig {
+    /// Frames per scene.
+    pub frames: u64,
+    /// Tour goals lie this far (m) outside each background object's footprint circle.
+    pub ring_clearance: f32,
+    /// Goals per ring around a background object.
+    pub ring_points: usize,
+    /// A goal not reached by then is skipped, s.
+    pub goal_timeout_s: f64,
+    /// Amplitude of the neck's yaw sweep, degrees.
+    pub neck_amplitude_deg: f32,
+    /// Period of the neck's yaw sweep, s.
+    pub neck_period_s: f32,
+}
+
+impl Default for SensingConfig {
+    /// The `[sensing]` section of the built-in `config/default.toml`.
+    fn default() -> Self {
+        settings::DEFAULTS.section("sensing")
+    }
+}
+
+impl SensingConfig {
+    fn validate(&self, c: &Checker) -> Result<(), ConfigError> {
+        c.count("sensing.frames", self.frames as usize, 1, 1_000_000)?;
+        c.in_range(
+            "sensing.ring_clearance",
+            self.ring_clearance.into(),
+            0.0,
+            10.0,
+        )?;
+        c.count("sensing.ring_points", self.ring_points, 1, 64)?;
+        c.in_range("sensing.goal_timeout_s", self.goal_timeout_s, 0.1, 3600.0)?;
+        c.in_range(
+            "sensing.neck_amplitude_deg",
+            self.neck_amplitude_deg.into(),
+            0.0,
+            180.0,
+        )?;
+        c.in_range(
+            "sensing.neck_period_s",
+            self.neck_period_s.into(),
+            0.1,
+            3600.0,
+        )
+    }
+}
+
+impl From<&Config> for sim::SimSetup {
+    /// The sections the simulator reads.
+    fn from(c: &Config) -> Self {
+        sim::SimSetup {
+            camera: c.camera,
+            sim: c.sim.clone(),
+            detector: c.detector.clone(),
+            robot: c.robot.clone(),
+            scenegen: c.scenegen,
+        }
+    }
+}
+
+impl Default for Config {
+    /// The built-in `config/default.toml` ([`Config::builtin`]).
+    fn default() -> Self {
+        Self::builtin()
+    }
+}
+
+impl Config {
+    /// A copy with the camera size (and rate) overridden where the override is non-zero.
+    pub fn with_camera(&self, width: u32, height: u32, camera_hz: f64) -> Config {
+        let mut c = self.clone();
+        if width > 0 && height > 0 {
+            (c.camera.width, c.camera.height) = (width, height);
+        }
+        if camera_hz > 0.0 {
+            c.rates.camera_hz = camera_hz;
+        }
+        c
+    }
+
+    /// Parse configuration text that came from `file` over the built-in defaults (keys it does
+    /// not set keep their default), and validate it.
+    pub fn parse(file: &Path, text: &str) -> Result<Self, ConfigError> {
+        let cfg: Config = settings::DEFAULTS.parse(file, text)?;
+        cfg.validate(file)?;
+        Ok(cfg)
+    }
+
+    /// Load and validate a configuration file.
+    pub fn load(file: &Path) -> Result<Self, ConfigError> {
+        let text = std::fs::read_to_string(file).map_err(|source| ConfigError::Read {
+            file: file.to_path_buf(),
+            source,
+        })?;
+        Self::parse(file, &text)
+    }
+
+    /// `file` if given; else `config/default.toml` in the working directory if present; else the
+    /// built-in copy of it. Returns the config and where it came from.
+    pub fn load_or_default(file: Option<&Path>) -> Result<(Self, PathBuf), ConfigError> {
+        match file {
+            Some(f) => Ok((Self::load(f)?, f.to_path_buf())),
+            None if Path::new(DEFAULT_PATH).is_file() => Ok((
+                Self::load(Path::new(DEFAULT_PATH))?,
+                PathBuf::from(DEFAULT_PATH),
+            )),
+            None => Ok((
+                Self::builtin(),
+                PathBuf::from("<built-in config/default.toml>"),
+            )),
+        }
+    }
+
+    /// The built-in configuration with `config/sensing-ideal.toml` merged over it: near-perfect
+    /// sensing (instance masks, no false positives or confusion, no depth artefacts, no SLAM
+    /// residuals), for tests of mapper and planner logic and for comparisons with the default.
+    ///
+    /// # Panics
+    /// Never in a build whose embedded `config/sensing-ideal.toml` is valid (a test checks it).
+    pub fn ideal_sensing() -> Self {
+        Self::parse(
+            Path::new("config/sensing-ideal.toml"),
+            include_str!("../../../config/sensing-ideal.toml"),
+        )
+        .expect("config/sensing-ideal.toml is valid")
+    }
+
+    /// The built-in defaults (`config/default.toml` as compiled in).
+    pub fn builtin() -> Self {
+        Self::parse(Path::new(DEFAULT_PATH), DEFAULT_TOML)
+            .expect("the shipped config/default.toml is valid")
+    }
+
+    /// Range-check every section.
+    pub fn validate(&self, file: &Path) -> Result<(), ConfigError> {
+        let c = Checker::new(file);
+        self.camera.validate(&c)?;
+        self.rates.validate(&c)?;
+        self.executor.validate(&c)?;
+        self.ports.validate(&c)?;
+        self.sim.validate(&c)?;
+        self.detector.validate(&c)?;
+        self.robot.validate(&c)?;
+        self.mapper.validate(&c)?;
+        self.planner.validate(&c)?;
+        self.run.validate(&c)?;
+        self.bench.validate(&c)?;
+        self.sensing.validate(&c)?;
+        self.scenegen.validate(&c)?;
+        self.recorder.validate(&c)?;
+        self.link.validate(&c)
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn a_partial_file_changes_only_its_keys() {
+        let builtin = Config::builtin();
+        let cfg = Config::parse(Path::new("p.toml"), "[camera]\nwidth = 320\n").unwrap();
+        assert_eq!(cfg.camera.width, 320);
+        assert_eq!(
+            CameraConfig {
+                width: builtin.camera.width,
+                ..cfg.camera
+            },
+            builtin.camera
+        );
+        assert_eq!(cfg.rates, builtin.rates);
+        assert_eq!(cfg.executor, builtin.executor);
+        assert_eq!(
+            cfg.ports, builtin.ports,
+            "the shipped per-topic overrides stay"
+        );
+        assert_eq!(cfg.planner, builtin.planner);
+        assert_eq!(cfg.mapper, builtin.mapper);
+        assert_eq!(cfg.recorder, builtin.recorder);
+        let empty = Config::parse(Path::new("e.toml"), "").unwrap();
+        assert_eq!(format!("{empty:?}"), format!("{builtin:?}"));
+        assert_eq!(format!("{:?}", Config::default()), format!("{builtin:?}"));
+        let mount = Config::parse(Path::new("m.toml"), "[camera.mount]\nheight = 1.2\n").unwrap();
+        assert_eq!(mount.camera.mount.height, 1.2);
+        assert_eq!(mount.camera.mount.pitch_deg, builtin.camera.mount.pitch_deg);
+    }
+
+    #[test]
+    fn bad_files_give_specific_errors() {
+        let f = Path::new("bad.toml");
+        let e = Config::parse(f, "[camera]\nwidht = 320\n").unwrap_err();
+        assert_eq!(e.key(), "camera.widht", "{e}");
+        assert!(
+            e.to_string()
+                .starts_with("bad.toml: camera.widht: line 2: "),
+            "{e}"
+        );
+        let e = Config::parse(f, "[camra]\n").unwrap_err();
+        assert!(e.to_string().contains("unknown field `camra`"), "{e}");
+        let e = Config::parse(f, "[camera]\nwidth = 2000\n").unwrap_err();
+        assert_eq!(
+            e.to_string(),
+            "bad.toml: camera.width = 2000: must be in [16, 640]"
+        );
+        let e = Config::parse(f, "[rates]\ncamera_hz = -3.0\n").unwrap_err();
+        assert_eq!(e.key(), "rates.camera_hz");
+        let e = Config::parse(f, "[camera]\nmin_range = 2.0\nmax_range = 1.0\n").unwrap_err();
+        assert_eq!(e.key(), "camera.max_range");
+        let e = Config::load(Path::new("/nonexistent/x.toml")).unwrap_err();
+        assert!(matches!(e, ConfigError::Read { .. }), "{e}");
+    }
+}

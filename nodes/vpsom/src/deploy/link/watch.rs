@@ -1,0 +1,231 @@
+//! What crossed the link, per topic: the tunnel's own typed subscriber on every topic of the
+//! run, counting the samples that came from the other host and the sequence numbers missing
+//! between them (lost across the link, or while it was down).
+//!
+//! These subscribers also create the run's services before anything else on the host does
+//! (the launcher starts the tunnel first), with the run's `[ports]` settings except that each
+//! subscriber may borrow a little more (see [`tunnel_ports`]) and a small topic's services
+//! buffer up to [`LinkConfig::buffer`](crate::config::LinkConfig) samples per subscriber: the tunnel's own subscribers (the bridge's, and these) take that
+//! depth, so the bursts in which samples come over a network do not overwrite them, while the
+//! nodes' subscribers keep the depth they ask for (a service admits any depth up to its own).
+
+use super::TopicCount;
+use crate::topics;
+use runtime::ports::{PortContext, ReceiveError, Subscriber, SubscriberError};
+use shm_types::{
+    DeadlineEvent, DepthFrame, Detections, FrameVisibility, Message, NavGoal, NeckGoal, ObjectMap,
+    OccupancyGrid, PlannerDecision, RobotState,
+};
+use std::time::{Duration, Instant};
+
+/// Every topic of a run (the tunnel's allow-list is built from it).
+pub const RUN_TOPICS: [&str; 12] = [
+    topics::DEPTH,
+    topics::DETECTIONS,
+    topics::STATE,
+    topics::TRUTH,
+    topics::VISIBILITY,
+    topics::NAV_GRID,
+    topics::MAP,
+    topics::MAP_GRID,
+    topics::NAV_GOAL,
+    topics::NECK_GOAL,
+    topics::DECISION,
+    topics::DEADLINE,
+];
+
+/// Topics whose message is at most this big get the tunnel's deeper buffer.
+pub const SMALL: usize = 16 * 1024;
+
+/// The size of a run topic's message, bytes.
+fn message_size(topic: &str) -> usize {
+    use std::mem::size_of;
+    match topic {
+        topics::DEPTH => size_of::<DepthFrame>(),
+        topics::DETECTIONS => size_of::<Detections>(),
+        topics::STATE | topics::TRUTH => size_of::<RobotState>(),
+        topics::VISIBILITY => size_of::<FrameVisibility>(),
+        topics::NAV_GRID | topics::MAP_GRID => size_of::<OccupancyGrid>(),
+        topics::MAP => size_of::<ObjectMap>(),
+        topics::NAV_GOAL => size_of::<NavGoal>(),
+        topics::NECK_GOAL => size_of::<NeckGoal>(),
+        topics::DECISION => size_of::<PlannerDecision>(),
+        topics::DEADLINE => size_of::<DeadlineEvent>(),
+        other => unreachable!("{other} is not a run topic"),
+    }
+}
+
+/// Extra samples a subscriber may hold borrowed on a service the tunnel created.
+const EXTRA_BORROWS: usize = 2;
+
+/// The `[ports]` settings the tunnel creates the run's services with: small topics buffer at
+/// least `buffer` samples per subscriber (see the module docs), and every subscriber may hold
+/// [`EXTRA_BORROWS`] more samples borrowed than `[ports]` says. Samples from the other host come
+/// in bursts, so a consumer that keeps the newest sample while draining to the next
+/// (`Subscriber::latest`) holds three at once where one host rarely gives it two
+/// (regression: the planner on the station died with `ExceedsMaxBorrows` on `map`).
+pub fn tunnel_ports(
+    ports: &runtime::ports::PortsConfig,
+    buffer: usize,
+) -> runtime::ports::PortsConfig {
+    let mut p = ports.clone();
+    for topic in RUN_TOPICS {
+        let s = ports.topic(topic);
+        let o = p.topics.entry(topic.to_string()).or_default();
+        o.subscriber_max_borrowed = Some(s.subscriber_max_borrowed + EXTRA_BORROWS);
+        if message_size(topic) <= SMALL {
+            o.subscriber_buffer = Some(s.subscriber_buffer.max(buffer));
+        }
+    }
+    p
+}
+
+/// Least interval between two log lines about lost samples on one topic.
+const LOSS_LOG_EVERY: Duration = Duration::from_secs(1);
+
+/// A typed subscriber seen as sequence numbers.
+trait Seqs {
+    /// Receive everything buffered, calling `f` with each sample's `header.seq`.
+    fn drain(&self, f: &mut dyn FnMut(u64)) -> Result<(), ReceiveError>;
+    /// Samples dropped on receipt because they failed validation.
+    fn invalid(&self) -> u64;
+}
+
+impl<T: Message> Seqs for Subscriber<T> {
+    fn drain(&self, f: &mut dyn FnMut(u64)) -> Result<(), ReceiveError> {
+        while let Some(s) = self.receive()? {
+            f(s.header().seq);
+        }
+        Ok(())
+    }
+
+    fn invalid(&self) -> u64 {
+        Subscriber::invalid(self)
+    }
+}
+
+fn subscribe(ctx: &PortContext, topic: &str) -> Result<Box<dyn Seqs>, SubscriberError> {
+    Ok(match topic {
+        topics::DEPTH => Box::new(ctx.subscriber::<DepthFrame>(topic)?),
+        topics::DETECTIONS => Box::new(ctx.subscriber::<Detections>(topic)?),
+        topics::STATE | topics::TRUTH => Box::new(ctx.subscriber::<RobotState>(topic)?),
+        topics::VISIBILITY => Box::new(ctx.subscriber::<FrameVisibility>(topic)?),
+        topics::NAV_GRID | topics::MAP_GRID => Box::new(ctx.subscriber::<OccupancyGrid>(topic)?),
+        topics::MAP => Box::new(ctx.subscriber::<ObjectMap>(topic)?),
+        topics::NAV_GOAL => Box::new(ctx.subscriber::<NavGoal>(topic)?),
+        topics::NECK_GOAL => Box::new(ctx.subscriber::<NeckGoal>(topic)?),
+        topics::DECISION => Box::new(ctx.subscriber::<PlannerDecision>(topic)?),
+        topics::DEADLINE => Box::new(ctx.subscriber::<DeadlineEvent>(topic)?),
+        other => unreachable!("{other} is not a run topic"),
+    })
+}
+
+/// One topic's account.
+struct Watched {
+    topic: &'static str,
+    sub: Box<dyn Seqs>,
+    /// Published on the other host (inbound); else here (outbound).
+    remote: bool,
+    /// Whether missing sequence numbers are losses (not for a rate-limited topic).
+    count_losses: bool,
+    last_seq: Option<u64>,
+    samples: u64,
+    lost: u64,
+    last_loss_log: Option<Instant>,
+}
+
+/// The per-topic account of a tunnel (see the module docs).
+pub struct Watch {
+    topics: Vec<Watched>,
+}
+
+impl std::fmt::Debug for Watch {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        f.debug_struct("Watch")
+            .field("topics", &self.topics.len())
+            .finish_non_exhaustive()
+    }
+}
+
+impl Watch {
+    /// Subscribe to every run topic; `local` are the topics published on this host and
+    /// `limited` the rate-limited ones.
+    pub fn new(
+        ctx: &PortContext,
+        local: &[&'static str],
+        limited: &[&'static str],
+    ) -> Result<Self, SubscriberError> {
+        let topics = RUN_TOPICS
+            .iter()
+            .map(|&topic| {
+                Ok(Watched {
+                    topic,
+                    sub: subscribe(ctx, topic)?,
+                    remote: !local.contains(&topic),
+                    count_losses: !limited.contains(&topic),
+                    last_seq: None,
+                    samples: 0,
+                    lost: 0,
+                    last_loss_log: None,
+                })
+            })
+            .collect::<Result<_, SubscriberError>>()?;
+        Ok(Self { topics })
+    }
+
+    /// Drain every subscriber; returns the inbound samples received. Logs lost sequence numbers
+    /// at most once per [`LOSS_LOG_EVERY`] per topic.
+    pub fn poll(&mut self, now: Instant) -> Result<u64, ReceiveError> {
+        let mut inbound = 0;
+        for w in &mut self.topics {
+            let (mut n, mut lost_now, mut jump) = (0u64, 0u64, None);
+            let (remote, count_losses) = (w.remote, w.count_losses);
+            let last = &mut w.last_seq;
+            w.sub.drain(&mut |seq| {
+                n += 1;
+                if let Some(l) = *last
+                    && remote
+                    && count_losses
+                    && seq > l + 1
+                {
+                    lost_now += seq - l - 1;
+                    jump = Some((l, seq));
+                }
+                *last = Some(seq);
+            })?;
+            w.samples += n;
+            if remote {
+                inbound += n;
+            }
+            if lost_now > 0 {
+                w.lost += lost_now;
+                if w.last_loss_log
+                    .is_none_or(|t| now.duration_since(t) >= LOSS_LOG_EVERY)
+                {
+                    w.last_loss_log = Some(now);
+                    let (a, b) = jump.unwrap_or_default();
+                    eprintln!(
+                        "\nlink: {}: {lost_now} sample(s) lost across the link (seq {a} -> {b}; {} so far)",
+                        w.topic, w.lost
+                    );
+                }
+            }
+        }
+        Ok(inbound)
+    }
+
+    /// Per-topic counts (topics that saw nothing are left out).
+    pub fn counts(&self) -> Vec<TopicCount> {
+        self.topics
+            .iter()
+            .filter(|w| w.samples > 0 || w.sub.invalid() > 0)
+            .map(|w| TopicCount {
+                topic: w.topic,
+                inbound: w.remote,
+                samples: w.samples,
+                lost: w.lost,
+                invalid: w.sub.invalid(),
+            })
+            .collect()
+    }
+}

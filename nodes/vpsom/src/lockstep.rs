@@ -1,0 +1,404 @@
+//! The lockstep host: sim, mapper and planner stepped in one thread of one process on a
+//! simulated clock, deterministic for a given seed, as fast as the CPU allows. Used by
+//! `vpsom bench`, by the tests, and as the reference the multi-process host is compared with.
+//!
+//! Rates follow `config/default.toml` in simulated time: robot state at `rates.state_hz` (the
+//! step), camera frames at `rates.camera_hz`, map publication at `rates.map_hz`, LBV at
+//! `planner.lbv_hz`. GBV jobs run inline (the result is available on the same step), which is
+//! what a host with an idle pool would see.
+
+use crate::config::Config;
+use crate::eval::{self, GtObject, MatchParams, Metrics, RunInfo, SessionLog};
+use crate::mapper::Mapper;
+use crate::planner::{self, PlannerInputs, PlannerKind, Step, Summary, ViewPlanner};
+use crate::sim::{Scene, Sim};
+use shm_types::{
+    DepthFrame, Detections, ObjectMap, OccupancyGrid, PlannerDecision, RobotState, boxed_zeroed,
+};
+use std::path::{Path, PathBuf};
+
+/// Why a lockstep session could not run or be written.
+#[derive(Debug, thiserror::Error)]
+pub enum SessionError {
+    /// The simulator could not be built.
+    #[error(transparent)]
+    Sim(#[from] crate::sim::SimError),
+    /// A configuration section was refused (e.g. the mapper's).
+    #[error(transparent)]
+    Config(#[from] settings::ConfigError),
+    /// The mapper refused a frame.
+    #[error(transparent)]
+    Mapper(#[from] crate::mapper::MapperError),
+    /// The recorder failed.
+    #[error(transparent)]
+    Recorder(#[from] runtime::recorder::RecorderError),
+    /// The metrics could not be serialized for the recorder.
+    #[error(transparent)]
+    Json(#[from] serde_json::Error),
+    /// The outputs could not be written.
+    #[error(transparent)]
+    Eval(#[from] crate::eval::EvalError),
+    /// Unknown planner in a label.
+    #[error(transparent)]
+    Planner(#[from] planner::UnknownPlanner),
+    /// Unknown F(v) term in an ablation label.
+    #[error(transparent)]
+    Term(#[from] planner::UnknownTerm),
+}
+
+/// What to run.
+#[derive(Debug, Clone)]
+pub struct SessionSpec {
+    /// The scene (ground truth; only the sim and the scoring see it).
+    pub scene: Scene,
+    /// Full configuration (`planner.kind` selects the planner).
+    pub config: Config,
+    /// Seed of every random process.
+    pub seed: u64,
+    /// Name of the planner in the outputs (e.g. `vpsom`, `vpsom-no-h_iou`).
+    pub label: String,
+    /// Give up after this much simulated time, seconds.
+    pub max_sim_s: f64,
+    /// Record the session to this MCAP file.
+    pub record: Option<PathBuf>,
+}
+
+/// Messages the host handed to the recorder, per kind (to check a trace against).
+#[derive(Debug, Clone, Copy, Default, PartialEq, Eq)]
+pub struct Recorded {
+    /// Depth frames.
+    pub depth: u64,
+    /// Estimated robot states.
+    pub state: u64,
+    /// True robot states.
+    pub truth: u64,
+    /// Object maps.
+    pub map: u64,
+    /// Planner decisions (GBV and LBV).
+    pub decisions: u64,
+    /// Nav goals.
+    pub nav_goals: u64,
+    /// Neck goals.
+    pub neck_goals: u64,
+}
+
+/// Progress, reported about once per simulated second.
+#[derive(Debug, Clone, Copy)]
+pub struct Progress {
+    /// Simulated time, seconds.
+    pub sim_s: f64,
+    /// Objects in the map (all classes).
+    pub objects: u32,
+    /// Foreground objects complete.
+    pub complete: u32,
+    /// Chassis goals issued so far.
+    pub goals: u64,
+}
+
+/// Everything a session produced.
+#[derive(Debug)]
+pub struct SessionResult {
+    /// The run's metrics (`metrics.json`).
+    pub metrics: Metrics,
+    /// The final map.
+    pub map: Box<ObjectMap>,
+    /// The logged trajectory and views.
+    pub log: SessionLog,
+    /// Planner summary.
+    pub summary: Summary,
+    /// Ground truth as scored.
+    pub gt: Vec<GtObject>,
+    /// Frames rendered.
+    pub frames: u64,
+    /// What was handed to the recorder (all zero without `record`).
+    pub recorded: Recorded,
+    /// The recorder's own summary (written, dropped), when recording.
+    pub recorder: Option<runtime::recorder::RecorderSummary>,
+    /// The final exploration grid (the mapper's, from depth).
+    pub explore: Box<OccupancyGrid>,
+    /// The navigation grid.
+    pub nav: Box<OccupancyGrid>,
+    /// The final estimated base pose.
+    pub base: [f32; 3],
+}
+
+/// Ground truth of a scene in the scorer's terms.
+pub fn ground_truth(scene: &Scene) -> Vec<GtObject> {
+    scene
+        .objects
+        .iter()
+        .map(|o| GtObject {
+            name: o.name.clone(),
+            class: o.class.clone(),
+            background: o.background,
+            center: o.center.to_array(),
+            size: o.size.to_array(),
+            yaw: o.yaw,
+        })
+        .collect()
+}
+
+/// The room outline for plots.
+pub fn room(scene: &Scene) -> eval::Room {
+    eval::Room {
+        min: scene.room.min.into(),
+        max: scene.room.max.into(),
+    }
+}
+
+/// Run one session to termination (or `max_sim_s`), calling `progress` about once per second.
+pub fn run_session(
+    spec: &SessionSpec,
+    mut progress: impl FnMut(&Progress),
+) -> Result<SessionResult, SessionError> {
+    let cfg = &spec.config;
+    let mut sim = Sim::new(spec.scene.clone(), cfg, spec.seed)?;
+    let camera = cfg.camera.camera();
+    let mut mapper = Mapper::new(&cfg.mapper, &camera)?;
+    let mut planner: Box<dyn ViewPlanner> = planner::make_planner(&cfg.planner, &cfg.camera);
+
+    let mut frame = boxed_zeroed::<DepthFrame>();
+    let mut dets = boxed_zeroed::<Detections>();
+    let mut map = boxed_zeroed::<ObjectMap>();
+    let mut nav = boxed_zeroed::<OccupancyGrid>();
+    let mut explore = boxed_zeroed::<OccupancyGrid>();
+    let mut lbv_trace = boxed_zeroed::<PlannerDecision>();
+    let mut state = RobotState::default();
+    sim.nav_grid(&mut nav);
+    let recorder = match &spec.record {
+        Some(path) => Some(runtime::recorder::Recorder::create(
+            path,
+            &cfg.recorder,
+            runtime::recorder::RecorderSetup {
+                host: "lockstep".into(),
+                ..super::deploy::recorder_setup(&spec.scene, cfg)
+            },
+        )?),
+        None => None,
+    };
+    let rec = recorder.as_ref().map(|r| r.handle());
+    let mut recorded = Recorded::default();
+    if let Some(r) = &rec {
+        r.record_nav_grid(&nav);
+    }
+
+    let period = |hz: f64| (1e9 / hz).round() as u64;
+    let dt = period(cfg.rates.state_hz);
+    let (cam_p, map_p, lbv_p) = (
+        period(cfg.rates.camera_hz),
+        period(cfg.rates.map_hz),
+        period(cfg.planner.lbv_hz),
+    );
+    let (mut next_cam, mut next_map, mut next_lbv, mut next_report) = (0u64, 0u64, 0u64, 0u64);
+    let max_ns = (spec.max_sim_s * 1e9) as u64;
+    let mut log = SessionLog::starting_at(0);
+    let mut frames = 0u64;
+    let mut finished: Option<Summary> = None;
+
+    while finished.is_none() && sim.time_ns() <= max_ns {
+        let t = sim.time_ns();
+        sim.robot_state(&mut state);
+        if t >= next_cam {
+            sim.render(&mut frame, &mut dets, t);
+            log.observe_visibility(sim.visibility());
+            frames += 1;
+            sim.robot_state(&mut state);
+            mapper.integrate(&frame, &dets, &state)?;
+            if let Some(r) = &rec {
+                r.record_depth(&frame);
+                r.record_detections(&dets);
+                recorded.depth += 1;
+            }
+            next_cam += cam_p;
+        }
+        if t >= next_map {
+            mapper.write_map(&mut map, t);
+            mapper.write_grid(&mut explore);
+            if let Some(r) = &rec {
+                r.record_map(&map);
+                recorded.map += 1;
+            }
+            next_map += map_p;
+        }
+        if t >= next_lbv {
+            let mut neck = planner.neck_goal(&map, &state, t);
+            stamp(&mut neck.header, t);
+            sim.set_neck_goal(&neck);
+            if planner.lbv_decision(&mut lbv_trace) {
+                stamp(&mut lbv_trace.header, t);
+                log.observe_decision(&lbv_trace);
+                if let Some(r) = &rec {
+                    r.record_decision(&lbv_trace);
+                    recorded.decisions += 1;
+                }
+            }
+            if let Some(r) = &rec {
+                r.record_neck_goal(&neck);
+                recorded.neck_goals += 1;
+            }
+            next_lbv += lbv_p;
+        }
+        let inputs = PlannerInputs {
+            map: &map,
+            state: &state,
+            nav: &nav,
+            explore: &explore,
+        };
+        let mut step = planner.next_goal(&inputs, t);
+        loop {
+            step = match step {
+                Step::Wait => break,
+                Step::Goal(mut goal) => {
+                    stamp(&mut goal.header, t);
+                    // A refused goal is reported back through RobotState (UNREACHABLE).
+                    let _ = sim.set_nav_goal(&goal);
+                    log.observe_goal(goal.kind);
+                    if let Some(mut d) = planner.take_decision() {
+                        stamp(&mut d.header, t);
+                        log.observe_decision(&d);
+                        if let Some(r) = &rec {
+                            r.record_decision(&d);
+                            recorded.decisions += 1;
+                        }
+                    }
+                    if let Some(r) = &rec {
+                        r.record_nav_goal(&goal);
+                        recorded.nav_goals += 1;
+                    }
+                    break;
+                }
+                Step::Compute(job) => planner.job_done(job.run(), t),
+                Step::Finished(summary) => {
+                    finished = Some(summary);
+                    break;
+                }
+            };
+        }
+        let truth = sim.true_state();
+        log.observe_truth(&truth);
+        if let Some(r) = &rec {
+            r.record_state(&state);
+            r.record_true_state(&truth);
+            recorded.state += 1;
+            recorded.truth += 1;
+        }
+        if t >= next_report {
+            progress(&progress_of(t, &map, planner.as_ref()));
+            next_report += 1_000_000_000;
+        }
+        sim.step(dt);
+    }
+
+    let end = sim.time_ns().min(max_ns);
+    let summary = finished.unwrap_or_else(|| planner.summary());
+    let terminated = summary.status == planner::PlannerStatus::Terminated;
+    let reason = match finished {
+        Some(s) => s.reason(),
+        None => format!("time limit {} s", spec.max_sim_s),
+    };
+    mapper.write_map(&mut map, end);
+    log.finish(end, terminated, &reason);
+    log.planner_outcome(
+        summary.explored,
+        given_up_entries(&planner.given_up_objects()),
+    );
+    let gt = ground_truth(&spec.scene);
+    let run = RunInfo {
+        scene: spec.scene.name.clone(),
+        planner: spec.label.clone(),
+        seed: spec.seed,
+    };
+    let est = eval::estimates_from_map(&map);
+    let metrics = log.metrics(&run, &gt, &est, &MatchParams::default());
+    if let Some(r) = &rec {
+        r.record_metrics(end, serde_json::to_value(&metrics)?);
+    }
+    drop(rec);
+    let recorder = recorder.map(|r| r.finish()).transpose()?;
+    Ok(SessionResult {
+        metrics,
+        map,
+        log,
+        summary,
+        gt,
+        frames,
+        recorded,
+        recorder,
+        explore,
+        nav,
+        base: state.base_pose,
+    })
+}
+
+/// The planner's given-up objects as `metrics.json` lists them.
+pub fn given_up_entries(objs: &[planner::GivenUpObject]) -> Vec<eval::GivenUpEntry> {
+    objs.iter()
+        .map(|g| eval::GivenUpEntry {
+            map_id: g.map_id,
+            cluster_id: g.cluster_id,
+            label: g.label.to_string(),
+            h_sopm: g.h_sopm,
+            cause: g.cause.name().to_string(),
+        })
+        .collect()
+}
+
+fn progress_of(t: u64, map: &ObjectMap, planner: &dyn ViewPlanner) -> Progress {
+    let objs = map.objects();
+    Progress {
+        sim_s: t as f64 * 1e-9,
+        objects: objs.len() as u32,
+        complete: objs
+            .iter()
+            .filter(|o| !o.is_background() && o.is_complete())
+            .count() as u32,
+        goals: planner.summary().goals_issued,
+    }
+}
+
+/// Write `metrics.json`, `map.json`, `plot.json` and `map.png` of a session into `dir`.
+pub fn write_outputs(
+    spec: &SessionSpec,
+    r: &SessionResult,
+    dir: &Path,
+) -> Result<(), SessionError> {
+    let run = RunInfo {
+        scene: spec.scene.name.clone(),
+        planner: spec.label.clone(),
+        seed: spec.seed,
+    };
+    let est = eval::estimates_from_map(&r.map);
+    let plot = r
+        .log
+        .plot_input(&run, room(&spec.scene), &r.gt, &est, &r.metrics);
+    eval::write_run_outputs(dir, &r.metrics, &est, &plot)?;
+    let frontier = planner::frontier::FrontierParams::new(&spec.config.planner);
+    let nav = frontier.nav.flooded(&r.nav, [r.base[0], r.base[1]]);
+    super::gridpng::write(&dir.join(EXPLORE_FILE), &r.explore, &frontier, &nav)?;
+    Ok(())
+}
+
+/// The final exploration grid with its frontiers, written next to `metrics.json`.
+pub const EXPLORE_FILE: &str = "explore.png";
+
+/// The configuration of a planner label: `vpsom`, `coverage`, `frontier`, or `vpsom-no-<term>`
+/// (an ablation of one F(v) term).
+pub fn config_for(base: &Config, label: &str) -> Result<Config, SessionError> {
+    let mut cfg = base.clone();
+    let (kind, ablate) = match label.split_once("-no-") {
+        Some((k, term)) => (k, Some(term)),
+        None => (label, None),
+    };
+    cfg.planner.kind = kind.parse::<PlannerKind>()?;
+    if let Some(term) = ablate {
+        cfg.planner.ablation.disable(term)?;
+    }
+    Ok(cfg)
+}
+
+/// Stamps a planner output with the simulated time it was made at, as a deployment host's
+/// publisher does when it sends it (the logic leaves headers to its host).
+pub(crate) fn stamp(h: &mut shm_types::Header, t: u64) {
+    h.stamp_ns = t;
+    h.sim_time_ns = t;
+}
