@@ -14,6 +14,7 @@
 //! | [`lockstep`] | one process, one thread, simulated clock: deterministic sessions (bench, tests) |
 //! | [`bench`](mod@bench) | scenes × planners × seeds on the lockstep host, report and figures |
 //! | [`replay`] | `vpsom replay`: the mapper and planner re-run on a trace's recorded inputs |
+//! | [`step`] | one step loop: the mapper and planner stepped on a simulated clock (lockstep, replay) |
 //! | [`sensing`] | `vpsom sensing`: a scripted tour of each scene, sensing scored against the ground truth |
 //! | [`topics`] | topic names of a live run |
 //!
@@ -26,6 +27,7 @@ pub mod gridpng;
 pub mod lockstep;
 pub mod replay;
 pub mod sensing;
+pub mod step;
 pub mod topics;
 
 pub use eval;

@@ -9,11 +9,12 @@
 
 use crate::config::Config;
 use crate::eval::{self, GtObject, MatchParams, Metrics, RunInfo, SessionLog};
-use crate::mapper::Mapper;
-use crate::planner::{self, PlannerInputs, PlannerKind, Step, Summary, ViewPlanner};
+use crate::planner::{self, PlannerKind, Summary, ViewPlanner};
 use crate::sim::{Scene, Sim};
+use crate::step::{NodeStep, Outputs};
 use shm_types::{
-    DepthFrame, Detections, ObjectMap, OccupancyGrid, PlannerDecision, RobotState, boxed_zeroed,
+    DepthFrame, Detections, NavGoal, NeckGoal, ObjectMap, OccupancyGrid, PlannerDecision,
+    RobotState, boxed_zeroed,
 };
 use std::path::{Path, PathBuf};
 
@@ -153,16 +154,11 @@ pub fn run_session(
 ) -> Result<SessionResult, SessionError> {
     let cfg = &spec.config;
     let mut sim = Sim::new(spec.scene.clone(), cfg, spec.seed)?;
-    let camera = cfg.camera.camera();
-    let mut mapper = Mapper::new(&cfg.mapper, &camera)?;
-    let mut planner: Box<dyn ViewPlanner> = planner::make_planner(&cfg.planner, &cfg.camera);
+    let mut nodes = NodeStep::new(cfg)?;
 
     let mut frame = boxed_zeroed::<DepthFrame>();
     let mut dets = boxed_zeroed::<Detections>();
-    let mut map = boxed_zeroed::<ObjectMap>();
     let mut nav = boxed_zeroed::<OccupancyGrid>();
-    let mut explore = boxed_zeroed::<OccupancyGrid>();
-    let mut lbv_trace = boxed_zeroed::<PlannerDecision>();
     let mut state = RobotState::default();
     sim.nav_grid(&mut nav);
     let recorder = match &spec.record {
@@ -184,12 +180,8 @@ pub fn run_session(
 
     let period = |hz: f64| (1e9 / hz).round() as u64;
     let dt = period(cfg.rates.state_hz);
-    let (cam_p, map_p, lbv_p) = (
-        period(cfg.rates.camera_hz),
-        period(cfg.rates.map_hz),
-        period(cfg.planner.lbv_hz),
-    );
-    let (mut next_cam, mut next_map, mut next_lbv, mut next_report) = (0u64, 0u64, 0u64, 0u64);
+    let cam_p = period(cfg.rates.camera_hz);
+    let (mut next_cam, mut next_report) = (0u64, 0u64);
     let max_ns = (spec.max_sim_s * 1e9) as u64;
     let mut log = SessionLog::starting_at(0);
     let mut frames = 0u64;
@@ -203,7 +195,7 @@ pub fn run_session(
             log.observe_visibility(sim.visibility());
             frames += 1;
             sim.robot_state(&mut state);
-            mapper.integrate(&frame, &dets, &state)?;
+            nodes.integrate(&frame, &dets, &state)?;
             if let Some(r) = &rec {
                 r.record_depth(&frame);
                 r.record_detections(&dets);
@@ -211,69 +203,13 @@ pub fn run_session(
             }
             next_cam += cam_p;
         }
-        if t >= next_map {
-            mapper.write_map(&mut map, t);
-            mapper.write_grid(&mut explore);
-            if let Some(r) = &rec {
-                r.record_map(&map);
-                recorded.map += 1;
-            }
-            next_map += map_p;
-        }
-        if t >= next_lbv {
-            let mut neck = planner.neck_goal(&map, &state, t);
-            stamp(&mut neck.header, t);
-            sim.set_neck_goal(&neck);
-            if planner.lbv_decision(&mut lbv_trace) {
-                stamp(&mut lbv_trace.header, t);
-                log.observe_decision(&lbv_trace);
-                if let Some(r) = &rec {
-                    r.record_decision(&lbv_trace);
-                    recorded.decisions += 1;
-                }
-            }
-            if let Some(r) = &rec {
-                r.record_neck_goal(&neck);
-                recorded.neck_goals += 1;
-            }
-            next_lbv += lbv_p;
-        }
-        let inputs = PlannerInputs {
-            map: &map,
-            state: &state,
-            nav: &nav,
-            explore: &explore,
+        let mut out = ToSim {
+            sim: &mut sim,
+            log: &mut log,
+            rec: rec.as_ref(),
+            recorded: &mut recorded,
         };
-        let mut step = planner.next_goal(&inputs, t);
-        loop {
-            step = match step {
-                Step::Wait => break,
-                Step::Goal(mut goal) => {
-                    stamp(&mut goal.header, t);
-                    // A refused goal is reported back through RobotState (UNREACHABLE).
-                    let _ = sim.set_nav_goal(&goal);
-                    log.observe_goal(goal.kind);
-                    if let Some(mut d) = planner.take_decision() {
-                        stamp(&mut d.header, t);
-                        log.observe_decision(&d);
-                        if let Some(r) = &rec {
-                            r.record_decision(&d);
-                            recorded.decisions += 1;
-                        }
-                    }
-                    if let Some(r) = &rec {
-                        r.record_nav_goal(&goal);
-                        recorded.nav_goals += 1;
-                    }
-                    break;
-                }
-                Step::Compute(job) => planner.job_done(job.run(), t),
-                Step::Finished(summary) => {
-                    finished = Some(summary);
-                    break;
-                }
-            };
-        }
+        finished = nodes.tick(t, &state, &nav, &mut out);
         let truth = sim.true_state();
         log.observe_truth(&truth);
         if let Some(r) = &rec {
@@ -283,12 +219,19 @@ pub fn run_session(
             recorded.truth += 1;
         }
         if t >= next_report {
-            progress(&progress_of(t, &map, planner.as_ref()));
+            progress(&progress_of(t, &nodes.map, nodes.planner.as_ref()));
             next_report += 1_000_000_000;
         }
         sim.step(dt);
     }
 
+    let NodeStep {
+        mut mapper,
+        planner,
+        mut map,
+        explore,
+        ..
+    } = nodes;
     let end = sim.time_ns().min(max_ns);
     let summary = finished.unwrap_or_else(|| planner.summary());
     let terminated = summary.status == planner::PlannerStatus::Terminated;
@@ -328,6 +271,50 @@ pub fn run_session(
         nav,
         base: state.base_pose,
     })
+}
+
+/// The lockstep host's [`Outputs`]: goals to the simulator, decisions and goals to the
+/// session log, everything to the recorder (if any).
+struct ToSim<'a> {
+    sim: &'a mut Sim,
+    log: &'a mut SessionLog,
+    rec: Option<&'a runtime::recorder::RecorderHandle>,
+    recorded: &'a mut Recorded,
+}
+
+impl Outputs for ToSim<'_> {
+    fn map(&mut self, map: &ObjectMap) {
+        if let Some(r) = self.rec {
+            r.record_map(map);
+            self.recorded.map += 1;
+        }
+    }
+
+    fn neck(&mut self, neck: &NeckGoal) {
+        self.sim.set_neck_goal(neck);
+        if let Some(r) = self.rec {
+            r.record_neck_goal(neck);
+            self.recorded.neck_goals += 1;
+        }
+    }
+
+    fn decision(&mut self, decision: &PlannerDecision) {
+        self.log.observe_decision(decision);
+        if let Some(r) = self.rec {
+            r.record_decision(decision);
+            self.recorded.decisions += 1;
+        }
+    }
+
+    fn nav(&mut self, goal: &NavGoal) {
+        // A refused goal is reported back through RobotState (UNREACHABLE).
+        let _ = self.sim.set_nav_goal(goal);
+        self.log.observe_goal(goal.kind);
+        if let Some(r) = self.rec {
+            r.record_nav_goal(goal);
+            self.recorded.nav_goals += 1;
+        }
+    }
 }
 
 /// The planner's given-up objects as `metrics.json` lists them.
@@ -394,11 +381,4 @@ pub fn config_for(base: &Config, label: &str) -> Result<Config, SessionError> {
         cfg.planner.ablation.disable(term)?;
     }
     Ok(cfg)
-}
-
-/// Stamps a planner output with the simulated time it was made at, as a deployment host's
-/// publisher does when it sends it (the logic leaves headers to its host).
-pub(crate) fn stamp(h: &mut shm_types::Header, t: u64) {
-    h.stamp_ns = t;
-    h.sim_time_ns = t;
 }

@@ -25,12 +25,10 @@
 //! Depth frames stream from a second reader thread (they are in time order in the file), so memory
 //! stays bounded for long traces.
 
-use super::lockstep::stamp;
 use crate::config::Config;
 use crate::eval::{self, MatchParams};
-use crate::mapper::Mapper;
-use crate::planner::{self, PlannerInputs, Step, ViewPlanner};
 use crate::sim::Scene;
+use crate::step::{NodeStep, Outputs};
 use runtime::recorder::convert;
 use runtime::recorder::decode::MessageType;
 use runtime::recorder::foxglove::Decode;
@@ -554,6 +552,34 @@ impl Sink<'_> {
         }
     }
 
+    /// Outputs the recording has and the replay never produced.
+    fn leftovers(&mut self) {
+        if !self.check || self.report.divergence.is_some() {
+            return;
+        }
+        let r = &self.recorded;
+        let left = [
+            (topic::MAP, r.maps.front().map(|x| x.0)),
+            (topic::DECISIONS, r.decisions.front().map(|x| x.0)),
+            (topic::NECK_GOAL, r.neck.front().map(|x| x.0)),
+            (topic::NAV_GOAL, r.nav.front().map(|x| x.0)),
+        ];
+        if let Some((topic, Some(t))) = left
+            .into_iter()
+            .filter(|(_, t)| t.is_some())
+            .min_by_key(|(_, t)| *t)
+        {
+            self.report.divergence = Some(Divergence {
+                time_ns: t,
+                topic,
+                index: self.report.produced.get(topic).copied().unwrap_or(0) as usize,
+                detail: "recorded, never produced by the replay".into(),
+            });
+        }
+    }
+}
+
+impl Outputs for Sink<'_> {
     fn map(&mut self, m: &ObjectMap) {
         let i = self.count(topic::MAP);
         let want = self.recorded.maps.pop_front();
@@ -601,32 +627,6 @@ impl Sink<'_> {
             r.record_nav_goal(g);
         }
     }
-
-    /// Outputs the recording has and the replay never produced.
-    fn leftovers(&mut self) {
-        if !self.check || self.report.divergence.is_some() {
-            return;
-        }
-        let r = &self.recorded;
-        let left = [
-            (topic::MAP, r.maps.front().map(|x| x.0)),
-            (topic::DECISIONS, r.decisions.front().map(|x| x.0)),
-            (topic::NECK_GOAL, r.neck.front().map(|x| x.0)),
-            (topic::NAV_GOAL, r.nav.front().map(|x| x.0)),
-        ];
-        if let Some((topic, Some(t))) = left
-            .into_iter()
-            .filter(|(_, t)| t.is_some())
-            .min_by_key(|(_, t)| *t)
-        {
-            self.report.divergence = Some(Divergence {
-                time_ns: t,
-                topic,
-                index: self.report.produced.get(topic).copied().unwrap_or(0) as usize,
-                detail: "recorded, never produced by the replay".into(),
-            });
-        }
-    }
 }
 
 /// Replay `spec.trace` (see the module docs).
@@ -652,15 +652,10 @@ pub fn replay(spec: &ReplaySpec) -> Result<ReplayReport, ReplayError> {
             ),
         ));
     }
-    let camera = cfg.camera.camera();
-    let mut mapper = Mapper::new(&cfg.mapper, &camera)?;
-    let mut planner: Box<dyn ViewPlanner> = planner::make_planner(&cfg.planner, &cfg.camera);
+    let mut nodes = NodeStep::new(cfg)?;
     let mut frame = boxed_zeroed::<DepthFrame>();
     let mut dets = boxed_zeroed::<Detections>();
-    let mut map = boxed_zeroed::<ObjectMap>();
     let mut nav = boxed_zeroed::<OccupancyGrid>();
-    let mut explore = boxed_zeroed::<OccupancyGrid>();
-    let mut lbv_trace = boxed_zeroed::<PlannerDecision>();
     let mut grids = inp.grids.iter().peekable();
 
     let recorder = match (&spec.out, spec.check) {
@@ -694,11 +689,8 @@ pub fn replay(spec: &ReplaySpec) -> Result<ReplayReport, ReplayError> {
     };
     let frames = depth_stream(path);
 
-    let period = |hz: f64| (1e9 / hz).round() as u64;
-    let (map_p, lbv_p) = (period(cfg.rates.map_hz), period(cfg.planner.lbv_hz));
-    let (mut next_map, mut next_lbv) = (0u64, 0u64);
     let mut end = 0;
-    'steps: for s in &inp.states {
+    for s in &inp.states {
         let t = s.sim_time_ns;
         end = t;
         let state = state_of(s).map_err(|e| trace_err(path, format!("/robot/state: {e}")))?;
@@ -723,50 +715,12 @@ pub fn replay(spec: &ReplaySpec) -> Result<ReplayReport, ReplayError> {
                 .get(&t)
                 .ok_or_else(|| trace_err(path, format!("no detections for the frame at {t} ns")))?;
             detections_of(d, &mut dets).map_err(|e| trace_err(path, e))?;
-            mapper.integrate(&frame, &dets, &state)?;
+            nodes.integrate(&frame, &dets, &state)?;
             report_frame(sink.report);
         }
-        if t >= next_map {
-            mapper.write_map(&mut map, t);
-            mapper.write_grid(&mut explore);
-            sink.map(&map);
-            next_map += map_p;
-        }
-        if t >= next_lbv {
-            let mut neck = planner.neck_goal(&map, &state, t);
-            stamp(&mut neck.header, t);
-            if planner.lbv_decision(&mut lbv_trace) {
-                stamp(&mut lbv_trace.header, t);
-                sink.decision(&lbv_trace);
-            }
-            sink.neck(&neck);
-            next_lbv += lbv_p;
-        }
-        let inputs = PlannerInputs {
-            map: &map,
-            state: &state,
-            nav: &nav,
-            explore: &explore,
-        };
-        let mut step = planner.next_goal(&inputs, t);
-        loop {
-            step = match step {
-                Step::Wait => break,
-                Step::Goal(mut goal) => {
-                    stamp(&mut goal.header, t);
-                    if let Some(mut d) = planner.take_decision() {
-                        stamp(&mut d.header, t);
-                        sink.decision(&d);
-                    }
-                    sink.nav(&goal);
-                    break;
-                }
-                Step::Compute(job) => planner.job_done(job.run(), t),
-                Step::Finished(summary) => {
-                    sink.report.finished = Some(summary.reason());
-                    break 'steps;
-                }
-            };
+        if let Some(summary) = nodes.tick(t, &state, &nav, &mut sink) {
+            sink.report.finished = Some(summary.reason());
+            break;
         }
         if let Some(r) = &sink.rec {
             r.record_state(&state);
@@ -777,9 +731,9 @@ pub fn replay(spec: &ReplaySpec) -> Result<ReplayReport, ReplayError> {
     drop(sink);
     report.end_ns = end;
     if let (Some(r), Some(dir)) = (recorder, &spec.out) {
-        mapper.write_map(&mut map, end);
+        nodes.mapper.write_map(&mut nodes.map, end);
         r.finish()?;
-        write_outputs(dir, inp.scene.as_deref(), &map)?;
+        write_outputs(dir, inp.scene.as_deref(), &nodes.map)?;
     }
     Ok(report)
 }
