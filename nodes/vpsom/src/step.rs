@@ -1,7 +1,8 @@
 //! One step loop for the hosts that step the mapper and the planner on a simulated clock
 //! (lockstep, replay): [`NodeStep`] owns the mapper, the planner and their outputs, and
 //! [`NodeStep::tick`] runs what is due at a time `t`: the map at `rates.map_hz`, the LBV at
-//! `planner.lbv_hz`, and the GBV, whose rounds run inline. The host feeds frames
+//! `planner.lbv_hz`, and the GBV, whose rounds run inline. [`gbv_cycle`] is the GBV part of a
+//! cycle that every host shares, the deploy planner and the live check included. The host feeds frames
 //! ([`NodeStep::integrate`]) and decides where the outputs go ([`Outputs`]): to the simulator
 //! and the recorder (lockstep), or to the comparison with a recording (replay).
 //!
@@ -9,7 +10,7 @@
 
 use crate::config::Config;
 use crate::mapper::{FrameStats, Mapper, MapperError};
-use crate::planner::{self, PlannerInputs, Step, Summary, ViewPlanner};
+use crate::planner::{self, JobOutput, PlannerInputs, Step, Summary, ViewPlanner};
 use shm_types::{
     DepthFrame, Detections, Header, NavGoal, NeckGoal, ObjectMap, OccupancyGrid, PlannerDecision,
     RobotState, boxed_zeroed,
@@ -97,29 +98,48 @@ impl NodeStep {
             out.neck(&neck);
             self.next_lbv += self.lbv_period;
         }
-        let inputs = PlannerInputs {
+        let inputs = || PlannerInputs {
             map: &self.map,
             state,
             nav,
             explore: &self.explore,
         };
-        let mut step = self.planner.next_goal(&inputs, t);
+        let planner = &mut *self.planner;
+        let mut step = gbv_cycle(planner, None, false, inputs, t);
         loop {
             step = match step {
                 Step::Wait => return None,
                 Step::Goal(mut goal) => {
                     stamp(&mut goal.header, t);
-                    if let Some(mut d) = self.planner.take_decision() {
+                    if let Some(mut d) = planner.take_decision() {
                         stamp(&mut d.header, t);
                         out.decision(&d);
                     }
                     out.nav(&goal);
                     return None;
                 }
-                Step::Compute(job) => self.planner.job_done(job.run(), t),
+                Step::Compute(job) => gbv_cycle(planner, Some(job.run()), false, inputs, t),
                 Step::Finished(summary) => return Some(summary),
             };
         }
+    }
+}
+
+/// The GBV part of a planner cycle, the same in every host: a finished `round` goes to the
+/// planner; else, unless a round is still out (`busy`), the planner is asked for its next step
+/// with the cycle's `inputs`. What the host does with a [`Step::Compute`] is its own: run it
+/// inline (lockstep, replay, the live check) or on the low-priority pool (the deploy planner).
+pub fn gbv_cycle<'a>(
+    planner: &mut dyn ViewPlanner,
+    round: Option<JobOutput>,
+    busy: bool,
+    inputs: impl FnOnce() -> PlannerInputs<'a>,
+    t: u64,
+) -> Step {
+    match round {
+        Some(out) => planner.job_done(out, t),
+        None if !busy => planner.next_goal(&inputs(), t),
+        None => Step::Wait,
     }
 }
 

@@ -8,6 +8,7 @@ use super::host::{self, Flow, HostError, NodeHost, Pace, Periodic};
 use crate::config::Config;
 use crate::planner::gbv::{self, GbvParams};
 use crate::planner::{self, JobOutput, PlannerInputs, Step, ViewPlanner};
+use crate::step::gbv_cycle;
 use crate::topics;
 use runtime::clock::{Clock, MonotonicClock};
 use runtime::executor::{EventTrace, ExecutorConfig};
@@ -331,18 +332,14 @@ impl NodeHost for PlannerHost {
         }
 
         // Chassis goals: rounds computed on the low-priority pool.
-        let mut step = round.map(|out| self.planner.job_done(out, t));
-        if step.is_none() && self.pending.is_none() && !self.job_outstanding {
-            let nav: &OccupancyGrid = self.nav.as_deref().unwrap_or(&self.empty_grid);
-            let explore: &OccupancyGrid = self.explore.as_deref().unwrap_or(&self.empty_grid);
-            let inputs = PlannerInputs {
-                map,
-                state: &self.state,
-                nav,
-                explore,
-            };
-            step = Some(self.planner.next_goal(&inputs, t));
-        }
+        let busy = self.pending.is_some() || self.job_outstanding;
+        let inputs = || PlannerInputs {
+            map,
+            state: &self.state,
+            nav: self.nav.as_deref().unwrap_or(&self.empty_grid),
+            explore: self.explore.as_deref().unwrap_or(&self.empty_grid),
+        };
+        let step = gbv_cycle(&mut *self.planner, round, busy, inputs, t);
         // A load job never takes the last slot, so a planning job always finds room.
         if let Some(l) = self.load.as_mut()
             && self.pool.outstanding() + 1 < self.pool.capacity()
@@ -354,7 +351,7 @@ impl NodeHost for PlannerHost {
         // A late-joining base controller (a restarted sim) gets the current goal from the
         // topic's history, which iceoryx2 delivers only from the publisher's side.
         self.nav_pub.update_connections()?;
-        let go_on = self.handle(step.unwrap_or(Step::Wait), t)?;
+        let go_on = self.handle(step, t)?;
         if let Some(job) = self.pending.take() {
             self.submitted_ns = self.clock.now_ns();
             match self.pool.try_submit(move || Work::Round(job.run())) {

@@ -39,6 +39,7 @@ use super::{
 use crate::config::Config;
 use crate::mapper::Mapper;
 use crate::planner::{self, PlannerInputs, Step, ViewPlanner};
+use crate::step::gbv_cycle;
 use runtime::recorder::convert;
 use runtime::recorder::foxglove::messages::{RawImage, SceneUpdate};
 use runtime::recorder::messages as rec;
@@ -507,24 +508,23 @@ impl<'a> Cycles<'a> {
             self.out.decision(t, convert::decision(&self.lbv))?;
         }
 
-        let mut step = None;
-        if want.round_done {
-            let job = self
-                .outstanding
-                .take()
-                .ok_or("the recording took a chassis-goal round, none is outstanding here")?;
-            step = Some(self.planner.job_done(job.run(), t));
-        }
-        if step.is_none() && self.outstanding.is_none() {
-            let inputs = PlannerInputs {
-                map,
-                state: &state,
-                nav,
-                explore,
-            };
-            step = Some(self.planner.next_goal(&inputs, t));
-        }
-        match step.unwrap_or(Step::Wait) {
+        let round = match want.round_done {
+            true => Some(
+                self.outstanding
+                    .take()
+                    .ok_or("the recording took a chassis-goal round, none is outstanding here")?
+                    .run(),
+            ),
+            false => None,
+        };
+        let busy = self.outstanding.is_some();
+        let inputs = || PlannerInputs {
+            map,
+            state: &state,
+            nav,
+            explore,
+        };
+        match gbv_cycle(&mut *self.planner, round, busy, inputs, t) {
             Step::Wait => {}
             Step::Compute(job) => self.outstanding = Some(job),
             Step::Goal(mut goal) => {
