@@ -6,6 +6,7 @@
 
 use crate::Header;
 use crate::validate::{Checker, Field, Validate, ValidationError};
+#[cfg(feature = "ipc")]
 use iceoryx2::prelude::ZeroCopySend;
 
 /// Input topics per [`NodeHealth`] (the recorder has the most: about ten).
@@ -16,9 +17,9 @@ pub const HEALTH_TOPIC_LEN: usize = 32;
 pub const HEALTH_NODE_LEN: usize = 16;
 
 /// The account of one input subscriber of a node, since the node (process) started.
-#[derive(Debug, Clone, Copy, Default, PartialEq, ZeroCopySend, bytemuck::Zeroable)]
+#[derive(Debug, Clone, Copy, Default, PartialEq, bytemuck::Zeroable)]
 #[repr(C)]
-#[type_name("vpsom::InputHealth")]
+#[cfg_attr(feature = "ipc", derive(ZeroCopySend), type_name("vpsom::InputHealth"))]
 pub struct InputHealth {
     /// Valid samples received.
     pub received: u64,
@@ -31,9 +32,9 @@ pub struct InputHealth {
 }
 
 /// A node's heartbeat and input account.
-#[derive(Debug, Clone, Copy, Default, PartialEq, ZeroCopySend, bytemuck::Zeroable)]
+#[derive(Debug, Clone, Copy, Default, PartialEq, bytemuck::Zeroable)]
 #[repr(C)]
-#[type_name("vpsom::NodeHealth")]
+#[cfg_attr(feature = "ipc", derive(ZeroCopySend), type_name("vpsom::NodeHealth"))]
 pub struct NodeHealth {
     /// Header (`seq` counts this node process's heartbeats from 1).
     pub header: Header,

@@ -70,6 +70,7 @@
 
 pub mod bounds;
 mod classes;
+#[cfg(feature = "ipc")]
 pub mod contract;
 mod health;
 mod message;
@@ -78,11 +79,11 @@ mod validate;
 
 pub use classes::{COCO_CLASSES, ClassId, class_id, class_name, is_background_class};
 pub use health::{HEALTH_NODE_LEN, HEALTH_TOPIC_LEN, InputHealth, MAX_HEALTH_INPUTS, NodeHealth};
-pub use message::{Message, init_reused, init_zeroed};
+pub use message::Message;
+#[cfg(feature = "ipc")]
+pub use message::{init_reused, init_zeroed};
 pub use messages::*;
 pub use validate::{Validate, ValidationError};
-
-use iceoryx2::prelude::ZeroCopySend;
 
 /// Payloads whose all-zero bit pattern is a valid value.
 ///
@@ -104,18 +105,30 @@ use iceoryx2::prelude::ZeroCopySend;
 /// The same struct with a `u8` field compiles and is `ZeroValid`:
 ///
 /// ```
-/// use iceoryx2::prelude::ZeroCopySend;
-///
-/// #[derive(Debug, ZeroCopySend, bytemuck::Zeroable)]
+/// #[derive(Debug, bytemuck::Zeroable)]
+/// #[cfg_attr(feature = "ipc", derive(iceoryx2::prelude::ZeroCopySend))]
 /// #[repr(C)]
 /// struct Status { seq: u64, mode: u8 }
 ///
 /// let s = shm_types::boxed_zeroed::<Status>();
 /// assert_eq!((s.seq, s.mode), (0, 0));
 /// ```
-pub trait ZeroValid: bytemuck::Zeroable + ZeroCopySend {}
+pub trait ZeroValid: bytemuck::Zeroable + IpcSend {}
 
-impl<T: bytemuck::Zeroable + ZeroCopySend> ZeroValid for T {}
+impl<T: bytemuck::Zeroable + IpcSend> ZeroValid for T {}
+
+/// With the `ipc` feature (the runtime and the app turn it on), iceoryx2's `ZeroCopySend`: the
+/// payload can be sent through shared memory. Without it (the logic crates, which never touch
+/// iceoryx2), every type: the message types are plain `#[repr(C)]` data.
+#[cfg(feature = "ipc")]
+pub trait IpcSend: iceoryx2::prelude::ZeroCopySend {}
+#[cfg(feature = "ipc")]
+impl<T: iceoryx2::prelude::ZeroCopySend> IpcSend for T {}
+/// See the `ipc` version: without the feature, every type.
+#[cfg(not(feature = "ipc"))]
+pub trait IpcSend {}
+#[cfg(not(feature = "ipc"))]
+impl<T> IpcSend for T {}
 
 /// Payloads for which **every** bit pattern of `size_of::<Self>()` initialised bytes is a valid
 /// value (not only all zeros), so memory that held an earlier value of the same type may be
@@ -136,9 +149,8 @@ impl<T: bytemuck::Zeroable + ZeroCopySend> ZeroValid for T {}
 /// With a `u8` in its place it compiles and is `AnyBitPattern`:
 ///
 /// ```
-/// use iceoryx2::prelude::ZeroCopySend;
-///
-/// #[derive(Debug, Clone, Copy, ZeroCopySend, bytemuck::AnyBitPattern)]
+/// #[derive(Debug, Clone, Copy, bytemuck::AnyBitPattern)]
+/// #[cfg_attr(feature = "ipc", derive(iceoryx2::prelude::ZeroCopySend))]
 /// #[repr(C)]
 /// struct Frame { seq: u64, valid: u8 }
 ///

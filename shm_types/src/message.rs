@@ -1,17 +1,22 @@
-//! The [`Message`] trait: every top-level payload carries a [`Header`], and a loaned shared-memory
-//! sample can be zero-initialised in place ([`init_zeroed`]) without a stack temporary, or, for
+//! The [`Message`] trait: every top-level payload carries a [`Header`], and (feature `ipc`) a
+//! loaned shared-memory sample can be zero-initialised in place ([`init_zeroed`]) without a stack temporary, or, for
 //! [`AnyBitPattern`] payloads, taken as it is ([`init_reused`]). Every message is [`Validate`]:
 //! subscribers check each sample on receipt.
 
+#[cfg(feature = "ipc")]
+use crate::{AnyBitPattern, zero_in_place};
 use crate::{
-    AnyBitPattern, DeadlineEvent, DepthFrame, Detections, FrameVisibility, Header, NavGoal,
-    NeckGoal, NodeHealth, ObjectMap, OccupancyGrid, PlannerDecision, RobotState, Validate,
-    ZeroValid, zero_in_place,
+    DeadlineEvent, DepthFrame, Detections, FrameVisibility, Header, NavGoal, NeckGoal, NodeHealth,
+    ObjectMap, OccupancyGrid, PlannerDecision, RobotState, Validate, ZeroValid,
 };
-use iceoryx2::prelude::{ZeroCopySend, ipc};
-use iceoryx2::sample_mut::SampleMut;
-use iceoryx2::sample_mut_uninit::SampleMutUninit;
+#[cfg(feature = "ipc")]
+use iceoryx2::{
+    prelude::{ZeroCopySend, ipc},
+    sample_mut::SampleMut,
+    sample_mut_uninit::SampleMutUninit,
+};
 use std::fmt::Debug;
+#[cfg(feature = "ipc")]
 use std::mem::MaybeUninit;
 
 /// A top-level message: zero-valid, sendable through iceoryx2, and starting with a [`Header`]
@@ -49,6 +54,7 @@ message!(
     NodeHealth
 );
 
+#[cfg(feature = "ipc")]
 /// Zero-fill a loaned, uninitialised iceoryx2 sample in place (in shared memory, no stack
 /// temporary) and mark it initialised.
 pub fn init_zeroed<S, T, H>(mut sample: SampleMutUninit<S, MaybeUninit<T>, H>) -> SampleMut<S, T, H>
@@ -63,6 +69,7 @@ where
     unsafe { sample.assume_init() }
 }
 
+#[cfg(feature = "ipc")]
 /// Take a loaned, uninitialised iceoryx2 sample **as it is**, without clearing it: the payload
 /// holds whatever this slot of the publisher's data segment last held: an earlier sample of the
 /// same service (sent, or loaned and dropped) or the zeros the OS mapped the segment with. For

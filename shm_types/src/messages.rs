@@ -10,6 +10,7 @@
 use crate::ClassId;
 use crate::bounds::{MAX_PITCH_RAD, MAX_WORLD_COORD_M, MAX_YAW_RAD};
 use crate::validate::{Checker, Field, Validate, ValidationError};
+#[cfg(feature = "ipc")]
 use iceoryx2::prelude::ZeroCopySend;
 
 /// Largest depth image: 640 × 480 (the paper's Kinect v2 is 512 × 424; smaller sizes by config).
@@ -37,9 +38,9 @@ pub const MAX_FRAME_RECEIPTS: usize = 16;
 pub const THREAD_NAME_LEN: usize = 32;
 
 /// Common header of every message.
-#[derive(Debug, Clone, Copy, Default, PartialEq, ZeroCopySend, bytemuck::AnyBitPattern)]
+#[derive(Debug, Clone, Copy, Default, PartialEq, bytemuck::AnyBitPattern)]
 #[repr(C)]
-#[type_name("vpsom::Header")]
+#[cfg_attr(feature = "ipc", derive(ZeroCopySend), type_name("vpsom::Header"))]
 pub struct Header {
     /// Per-publisher sequence number, starting at 1 (0 means "never written").
     pub seq: u64,
@@ -50,9 +51,9 @@ pub struct Header {
 }
 
 /// A rigid transform `parent_from_child`: translation and unit quaternion `[x, y, z, w]`.
-#[derive(Debug, Clone, Copy, PartialEq, ZeroCopySend, bytemuck::AnyBitPattern)]
+#[derive(Debug, Clone, Copy, PartialEq, bytemuck::AnyBitPattern)]
 #[repr(C)]
-#[type_name("vpsom::Pose3")]
+#[cfg_attr(feature = "ipc", derive(ZeroCopySend), type_name("vpsom::Pose3"))]
 pub struct Pose3 {
     /// Translation, metres.
     pub translation: [f32; 3],
@@ -90,9 +91,9 @@ impl Pose3 {
 }
 
 /// Pinhole intrinsics of the depth camera (pixels) and its valid range (metres).
-#[derive(Debug, Clone, Copy, Default, PartialEq, ZeroCopySend, bytemuck::AnyBitPattern)]
+#[derive(Debug, Clone, Copy, Default, PartialEq, bytemuck::AnyBitPattern)]
 #[repr(C)]
-#[type_name("vpsom::Intrinsics")]
+#[cfg_attr(feature = "ipc", derive(ZeroCopySend), type_name("vpsom::Intrinsics"))]
 pub struct Intrinsics {
     /// Focal length x, pixels.
     pub fx: f32,
@@ -110,9 +111,9 @@ pub struct Intrinsics {
 
 /// One depth image, `u16` millimetres, 0 = invalid. (`Copy` only because
 /// `bytemuck::AnyBitPattern` requires it: never copy one by value, see [`crate::AnyBitPattern`].)
-#[derive(Debug, Clone, Copy, ZeroCopySend, bytemuck::AnyBitPattern)]
+#[derive(Debug, Clone, Copy, bytemuck::AnyBitPattern)]
 #[repr(C)]
-#[type_name("vpsom::DepthFrame")]
+#[cfg_attr(feature = "ipc", derive(ZeroCopySend), type_name("vpsom::DepthFrame"))]
 pub struct DepthFrame {
     /// Header.
     pub header: Header,
@@ -181,11 +182,9 @@ impl Validate for DepthFrame {
 /// One detected instance.
 // `Pod` (no padding, any bits), not only `AnyBitPattern`: bytemuck makes an array
 // `AnyBitPattern` only through `Pod`, and `Detections` holds `[Detection; 64]`.
-#[derive(
-    Debug, Clone, Copy, Default, PartialEq, ZeroCopySend, bytemuck::Pod, bytemuck::Zeroable,
-)]
+#[derive(Debug, Clone, Copy, Default, PartialEq, bytemuck::Pod, bytemuck::Zeroable)]
 #[repr(C)]
-#[type_name("vpsom::Detection")]
+#[cfg_attr(feature = "ipc", derive(ZeroCopySend), type_name("vpsom::Detection"))]
 pub struct Detection {
     /// COCO class id (see [`crate::COCO_CLASSES`]).
     pub class_id: ClassId,
@@ -201,9 +200,9 @@ pub struct Detection {
 
 /// Instance detections for one depth frame, with an instance label image. (`Copy` only because
 /// `bytemuck::AnyBitPattern` requires it: never copy one by value.)
-#[derive(Debug, Clone, Copy, ZeroCopySend, bytemuck::AnyBitPattern)]
+#[derive(Debug, Clone, Copy, bytemuck::AnyBitPattern)]
 #[repr(C)]
-#[type_name("vpsom::Detections")]
+#[cfg_attr(feature = "ipc", derive(ZeroCopySend), type_name("vpsom::Detections"))]
 pub struct Detections {
     /// Header (stamps equal to the frame's).
     pub header: Header,
@@ -381,9 +380,9 @@ pub mod nav_status {
 }
 
 /// State of the robot: base pose, neck, odometry uncertainty, localization and navigation status.
-#[derive(Debug, Clone, Copy, Default, PartialEq, ZeroCopySend, bytemuck::Zeroable)]
+#[derive(Debug, Clone, Copy, Default, PartialEq, bytemuck::Zeroable)]
 #[repr(C)]
-#[type_name("vpsom::RobotState")]
+#[cfg_attr(feature = "ipc", derive(ZeroCopySend), type_name("vpsom::RobotState"))]
 pub struct RobotState {
     /// Header.
     pub header: Header,
@@ -456,9 +455,9 @@ pub mod sopm_shape {
 }
 
 /// One object of the sparse object map.
-#[derive(Debug, Clone, Copy, ZeroCopySend, bytemuck::Zeroable)]
+#[derive(Debug, Clone, Copy, bytemuck::Zeroable)]
 #[repr(C)]
-#[type_name("vpsom::MapObject")]
+#[cfg_attr(feature = "ipc", derive(ZeroCopySend), type_name("vpsom::MapObject"))]
 pub struct MapObject {
     /// Monotonic timestamp (ns) when the object was first seen (clusters are sorted by it).
     pub first_seen_ns: u64,
@@ -612,9 +611,9 @@ impl MapObject {
 }
 
 /// The sparse object map: one cuboid per object, with the per-object view-planning information.
-#[derive(Debug, ZeroCopySend, bytemuck::Zeroable)]
+#[derive(Debug, bytemuck::Zeroable)]
 #[repr(C)]
-#[type_name("vpsom::ObjectMap")]
+#[cfg_attr(feature = "ipc", derive(ZeroCopySend), type_name("vpsom::ObjectMap"))]
 pub struct ObjectMap {
     /// Header.
     pub header: Header,
@@ -647,9 +646,13 @@ pub struct ObjectMap {
 
 /// What the mapper did with one depth frame: which frame, with which robot state, and what came
 /// of it ([`frame_outcome`]).
-#[derive(Debug, Clone, Copy, Default, PartialEq, Eq, ZeroCopySend, bytemuck::Zeroable)]
+#[derive(Debug, Clone, Copy, Default, PartialEq, Eq, bytemuck::Zeroable)]
 #[repr(C)]
-#[type_name("vpsom::FrameReceipt")]
+#[cfg_attr(
+    feature = "ipc",
+    derive(ZeroCopySend),
+    type_name("vpsom::FrameReceipt")
+)]
 pub struct FrameReceipt {
     /// `header.seq` of the [`DepthFrame`].
     pub frame_seq: u64,
@@ -760,9 +763,13 @@ pub mod grid_cell {
 
 /// A 2D occupancy grid in the world frame: the navigation map (obstacles only) or the
 /// depth-built exploration grid (with unknown cells, for frontiers).
-#[derive(Debug, ZeroCopySend, bytemuck::Zeroable)]
+#[derive(Debug, bytemuck::Zeroable)]
 #[repr(C)]
-#[type_name("vpsom::OccupancyGrid")]
+#[cfg_attr(
+    feature = "ipc",
+    derive(ZeroCopySend),
+    type_name("vpsom::OccupancyGrid")
+)]
 pub struct OccupancyGrid {
     /// Header.
     pub header: Header,
@@ -841,9 +848,9 @@ pub mod goal_kind {
 }
 
 /// A chassis goal.
-#[derive(Debug, Clone, Copy, Default, PartialEq, ZeroCopySend, bytemuck::Zeroable)]
+#[derive(Debug, Clone, Copy, Default, PartialEq, bytemuck::Zeroable)]
 #[repr(C)]
-#[type_name("vpsom::NavGoal")]
+#[cfg_attr(feature = "ipc", derive(ZeroCopySend), type_name("vpsom::NavGoal"))]
 pub struct NavGoal {
     /// Header.
     pub header: Header,
@@ -875,9 +882,9 @@ impl Validate for NavGoal {
 }
 
 /// A neck (sensor) goal relative to the base.
-#[derive(Debug, Clone, Copy, Default, PartialEq, ZeroCopySend, bytemuck::Zeroable)]
+#[derive(Debug, Clone, Copy, Default, PartialEq, bytemuck::Zeroable)]
 #[repr(C)]
-#[type_name("vpsom::NeckGoal")]
+#[cfg_attr(feature = "ipc", derive(ZeroCopySend), type_name("vpsom::NeckGoal"))]
 pub struct NeckGoal {
     /// Header.
     pub header: Header,
@@ -920,9 +927,13 @@ impl Validate for NeckGoal {
 }
 
 /// One record of a deadline monitor (periodic executor cycle).
-#[derive(Debug, Clone, Copy, Default, PartialEq, ZeroCopySend, bytemuck::Zeroable)]
+#[derive(Debug, Clone, Copy, Default, PartialEq, bytemuck::Zeroable)]
 #[repr(C)]
-#[type_name("vpsom::DeadlineEvent")]
+#[cfg_attr(
+    feature = "ipc",
+    derive(ZeroCopySend),
+    type_name("vpsom::DeadlineEvent")
+)]
 pub struct DeadlineEvent {
     /// Header.
     pub header: Header,
@@ -1007,9 +1018,9 @@ impl Validate for DeadlineEvent {
 }
 
 /// One evaluated candidate view with every term of F(v) (paper eqs. 1–4).
-#[derive(Debug, Clone, Copy, Default, PartialEq, ZeroCopySend, bytemuck::Zeroable)]
+#[derive(Debug, Clone, Copy, Default, PartialEq, bytemuck::Zeroable)]
 #[repr(C)]
-#[type_name("vpsom::Candidate")]
+#[cfg_attr(feature = "ipc", derive(ZeroCopySend), type_name("vpsom::Candidate"))]
 pub struct Candidate {
     /// Camera position, world frame.
     pub position: [f32; 3],
@@ -1095,9 +1106,13 @@ pub mod planner_state {
 }
 
 /// A planner decision: the evaluated candidates of one GBV round or LBV cycle.
-#[derive(Debug, ZeroCopySend, bytemuck::Zeroable)]
+#[derive(Debug, bytemuck::Zeroable)]
 #[repr(C)]
-#[type_name("vpsom::PlannerDecision")]
+#[cfg_attr(
+    feature = "ipc",
+    derive(ZeroCopySend),
+    type_name("vpsom::PlannerDecision")
+)]
 pub struct PlannerDecision {
     /// Header.
     pub header: Header,
@@ -1173,9 +1188,13 @@ impl Validate for PlannerDecision {
 
 /// How much of one ground-truth object a rendered frame shows (one entry of
 /// [`FrameVisibility`]). Ground truth: for evaluation only.
-#[derive(Debug, Clone, Copy, Default, PartialEq, ZeroCopySend, bytemuck::Zeroable)]
+#[derive(Debug, Clone, Copy, Default, PartialEq, bytemuck::Zeroable)]
 #[repr(C)]
-#[type_name("vpsom::ObjectVisibility")]
+#[cfg_attr(
+    feature = "ipc",
+    derive(ZeroCopySend),
+    type_name("vpsom::ObjectVisibility")
+)]
 pub struct ObjectVisibility {
     /// Index of the object in the scene.
     pub object: u32,
@@ -1195,9 +1214,13 @@ pub struct ObjectVisibility {
 /// Per rendered frame, the visibility of every ground-truth foreground object in the camera's
 /// view (`sim/visibility`, evaluation only; which objects count is the simulator's
 /// `Sim::visibility`, the metric is `vpsom::eval::occlusion`).
-#[derive(Debug, Clone, Copy, ZeroCopySend, bytemuck::Zeroable)]
+#[derive(Debug, Clone, Copy, bytemuck::Zeroable)]
 #[repr(C)]
-#[type_name("vpsom::FrameVisibility")]
+#[cfg_attr(
+    feature = "ipc",
+    derive(ZeroCopySend),
+    type_name("vpsom::FrameVisibility")
+)]
 pub struct FrameVisibility {
     /// Header.
     pub header: Header,
@@ -1277,6 +1300,7 @@ mod tests {
         assert_eq!(align_of::<ObjectMap>(), 8);
     }
 
+    #[cfg(feature = "ipc")]
     #[test]
     fn type_names_are_stable() {
         use iceoryx2::prelude::ZeroCopySend;
