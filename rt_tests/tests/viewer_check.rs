@@ -36,6 +36,7 @@ fn missing_precondition(vpsom: &Path) -> Option<String> {
     }
     for pkg in [
         "@foxglove/ws-protocol",
+        "@foxglove/crc",
         "@mcap/core",
         "@mcap/support",
         "protobufjs",
