@@ -120,16 +120,21 @@ fn accept_loop(
                 .unwrap_or_else(|e| e.into_inner())
                 .insert(id, c);
         }
-        let conns = Arc::clone(conns);
-        let spawned = std::thread::Builder::new()
-            .name("live-up".into())
-            .spawn(move || {
-                let _ = relay(&client, backend);
-                let _ = client.shutdown(Shutdown::Both);
-                conns.lock().unwrap_or_else(|e| e.into_inner()).remove(&id);
-            });
+        let spawned = {
+            let conns = Arc::clone(conns);
+            std::thread::Builder::new()
+                .name("live-up".into())
+                .spawn(move || {
+                    let _ = relay(&client, backend);
+                    let _ = client.shutdown(Shutdown::Both);
+                    conns.lock().unwrap_or_else(|e| e.into_inner()).remove(&id);
+                })
+        };
         if spawned.is_err() {
             eprintln!("live view: no thread for a viewer's connection; refused");
+            if let Some(c) = conns.lock().unwrap_or_else(|e| e.into_inner()).remove(&id) {
+                let _ = c.shutdown(Shutdown::Both);
+            }
         }
     }
 }
@@ -293,6 +298,57 @@ mod tests {
                 "Sec-WebSocket-Protocol: foxglove.websocket.v1"
             )
         );
+    }
+
+    /// A stand-in for the crate's server: answers one upgrade with `foxglove.sdk.v1` if offered,
+    /// then sends `data` and keeps the connection open.
+    fn fake_backend(data: &'static [u8]) -> SocketAddr {
+        let l = TcpListener::bind((Ipv4Addr::LOCALHOST, 0)).unwrap();
+        let addr = l.local_addr().unwrap();
+        std::thread::spawn(move || {
+            let (mut s, _) = l.accept().unwrap();
+            let (head, _) = read_head(&mut s).unwrap();
+            let head = String::from_utf8(head).unwrap();
+            assert!(
+                head.contains("Sec-WebSocket-Protocol: foxglove.sdk.v1\r\n"),
+                "{head}"
+            );
+            let answer = "HTTP/1.1 101 Switching Protocols\r\nsec-websocket-protocol: foxglove.sdk.v1\r\n\r\n";
+            s.write_all(answer.as_bytes()).unwrap();
+            s.write_all(data).unwrap();
+            // Hold the connection until the front closes it.
+            let _ = s.read(&mut [0u8; 1]);
+        });
+        addr
+    }
+
+    #[test]
+    fn a_legacy_client_is_relayed_and_dropping_the_front_closes_it_and_frees_the_port() {
+        let front = Front::start("127.0.0.1", 0, fake_backend(b"\x01payload")).unwrap();
+        let port = front.port();
+        let mut c = TcpStream::connect((Ipv4Addr::LOCALHOST, port)).unwrap();
+        c.set_read_timeout(Some(Duration::from_secs(10))).unwrap();
+        c.write_all(
+            format!("{REQ}Sec-WebSocket-Protocol: {LEGACY_SUBPROTOCOL}\r\n\r\n").as_bytes(),
+        )
+        .unwrap();
+        let (head, mut rest) = read_head(&mut c).unwrap();
+        let head = String::from_utf8(head).unwrap();
+        assert!(
+            head.contains("Sec-WebSocket-Protocol: foxglove.websocket.v1\r\n"),
+            "{head}"
+        );
+        while rest.len() < 8 {
+            let mut b = [0u8; 64];
+            let n = c.read(&mut b).unwrap();
+            assert!(n > 0, "closed early");
+            rest.extend_from_slice(&b[..n]);
+        }
+        assert_eq!(rest, b"\x01payload");
+        drop(front);
+        // The viewer's connection is closed, and the port is free again.
+        assert_eq!(c.read(&mut [0u8; 8]).unwrap(), 0);
+        TcpListener::bind((Ipv4Addr::LOCALHOST, port)).expect("the port is freed");
     }
 
     #[test]
