@@ -1,7 +1,9 @@
-//! The live view: a WebSocket client speaking Foxglove's protocol (`foxglove.sdk.v1`) connects to
-//! a recording's live-view server, finds every channel advertised with Foxglove's protobuf
-//! schemas, subscribes, and receives depth images (`foxglove.RawImage`) and maps
-//! (`foxglove.SceneUpdate`) that decode to what was recorded.
+//! The live view: a WebSocket client speaking Foxglove's protocol connects to a recording's
+//! live-view server, finds every channel advertised with Foxglove's protobuf schemas,
+//! subscribes, and receives depth images (`foxglove.RawImage`) and maps (`foxglove.SceneUpdate`)
+//! that decode to what was recorded. Once under each name of the protocol: `foxglove.sdk.v1`
+//! (the `foxglove` crate's) and `foxglove.websocket.v1` (Lichtblick's and `@foxglove/ws-protocol`'s,
+//! refused with HTTP 400 before the live view's front renamed it: issue 36).
 
 mod recorder_common;
 
@@ -19,7 +21,19 @@ use tungstenite::{Message, stream::MaybeTlsStream};
 
 #[test]
 fn a_foxglove_client_sees_the_channels_and_receives_images_and_scenes() {
-    let dir = std::env::temp_dir().join(format!("vpsom-recorder-live-{}", std::process::id()));
+    client_sees_channels_and_receives_images_and_scenes("foxglove.sdk.v1");
+}
+
+#[test]
+fn a_legacy_ws_protocol_client_is_served_the_same() {
+    client_sees_channels_and_receives_images_and_scenes("foxglove.websocket.v1");
+}
+
+fn client_sees_channels_and_receives_images_and_scenes(subprotocol: &str) {
+    let dir = std::env::temp_dir().join(format!(
+        "vpsom-recorder-live-{}-{subprotocol}",
+        std::process::id()
+    ));
     std::fs::create_dir_all(&dir).unwrap();
     let setup = RecorderSetup {
         live_port: Some(0),
@@ -46,8 +60,13 @@ fn a_foxglove_client_sees_the_channels_and_receives_images_and_scenes() {
         .into_client_request()
         .unwrap();
     req.headers_mut()
-        .insert("Sec-WebSocket-Protocol", "foxglove.sdk.v1".parse().unwrap());
-    let (mut ws, _) = tungstenite::connect(req).expect("connect to the live view");
+        .insert("Sec-WebSocket-Protocol", subprotocol.parse().unwrap());
+    let (mut ws, resp) = tungstenite::connect(req).expect("connect to the live view");
+    assert_eq!(
+        resp.headers()["sec-websocket-protocol"],
+        subprotocol,
+        "the server names the protocol the client offered"
+    );
     if let MaybeTlsStream::Plain(s) = ws.get_ref() {
         s.set_read_timeout(Some(Duration::from_secs(5))).unwrap();
     }

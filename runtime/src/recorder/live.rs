@@ -5,20 +5,29 @@
 //! the only one that touches the server, and the server's own tokio threads send to clients from
 //! bounded per-client queues.
 //!
+//! Viewers offering either name of the protocol connect: `foxglove.sdk.v1` (Foxglove today) and
+//! `foxglove.websocket.v1` (Lichtblick, older Foxglove Studio, `@foxglove/ws-protocol` clients).
+//! The crate's server accepts only the first, so it listens on loopback and the public port is a
+//! front that renames the second during the handshake ([`super::live_front`]); past the handshake
+//! both get the same server's bytes.
+//!
 //! Connect: Foxglove → *Open connection* → *Foxglove WebSocket* → `ws://HOST:PORT` (default
 //! port 8765), then load `config/foxglove-layout.json`. Messages written once (ground truth, the
 //! navigation grid) are published again every `recorder.stats_interval_s` for viewers that
 //! connect later.
 
 use super::RecorderError;
+use super::live_front::Front;
 use super::schemas::ChannelDef;
 use foxglove::{Context, PartialMetadata, RawChannel, WebSocketServer, WebSocketServerHandle};
+use std::net::{Ipv4Addr, SocketAddr};
 use std::sync::Arc;
 
 /// A running live-view server and one channel per recorded topic.
 pub struct LiveView {
     _ctx: Arc<Context>,
     server: Option<WebSocketServerHandle>,
+    front: Option<Front>,
     channels: Vec<Arc<RawChannel>>,
     port: u16,
 }
@@ -50,13 +59,17 @@ impl LiveView {
         let server = WebSocketServer::new()
             .name("vpsom-rt")
             .context(&ctx)
-            .bind("0.0.0.0", port)
+            .bind("127.0.0.1", 0)
             .start_blocking()
             .map_err(err)?;
-        let port = server.port();
+        let backend = SocketAddr::from((Ipv4Addr::LOCALHOST, server.port()));
+        let front = Front::start("0.0.0.0", port, backend)
+            .map_err(|e| RecorderError::Live(format!("port {port}: {e}")))?;
+        let port = front.port();
         Ok(Self {
             _ctx: ctx,
             server: Some(server),
+            front: Some(front),
             channels: chans,
             port,
         })
@@ -95,5 +108,6 @@ impl Drop for LiveView {
             // Dropping the shutdown handle aborts the client tasks at once.
             drop(s.stop());
         }
+        drop(self.front.take());
     }
 }

@@ -11,6 +11,7 @@
 //! | `decode.rs` | reading any channel back through the schema in the file |
 //! | `inspect.rs` | reading traces back: `info`, CSV export (all segments of a run) |
 //! | `recover.rs` | torn-file recovery and the run's segments |
+//! | `live.rs`, `live_front.rs` | the live view (Foxglove's WebSocket protocol, both its names) |
 //!
 //! # Threading
 //! [`Recorder::create`] opens the file and starts one named writer thread (`recorder`) that owns
@@ -95,6 +96,7 @@ pub mod convert;
 pub mod decode;
 pub mod inspect;
 pub mod live;
+mod live_front;
 pub mod messages;
 pub mod recover;
 pub mod schemas;
