@@ -4,7 +4,7 @@
 //! feed it ground truth, the final [`shm_types::ObjectMap`] and the stream of robot states,
 //! planner decisions and deadline events, then write the files it produces.
 //!
-//! The metric definitions follow `DESIGN.md` § "Metrics" (and the paper's section 7):
+//! The metric definitions follow `docs/formats.md` § "Metrics" (and the paper's section 7):
 //! - [`matching`]: one-to-one same-class assignment of estimated to ground-truth objects
 //!   (Hungarian algorithm, see [`matching::assign`] for the exact objective);
 //! - [`metrics`]: precision, recall, IoU, CDE of a map ([`score_map`]), the run's

@@ -1,4 +1,4 @@
-//! `map.json`: the final estimated map of a run, in the format fixed by `DESIGN.md`:
+//! `map.json`: the final estimated map of a run, in the format fixed by `docs/formats.md`:
 //! `{"scene": NAME, "objects": [{"class", "background", "center", "size", "yaw", "h_sopm",
 //! "complete"}, ...]}` (world frame, metres, radians).
 

@@ -1,4 +1,4 @@
-//! Map scores and the per-run metrics (`metrics.json`), following `DESIGN.md` § "Metrics".
+//! Map scores and the per-run metrics (`metrics.json`), following `docs/formats.md` § "Metrics".
 
 use super::iou::aligned_iou;
 use super::matching::{MatchParams, ObjectMatch, assign};
@@ -185,7 +185,7 @@ pub struct RunInfo {
 
 /// The metrics of one run: the content of `metrics.json`.
 ///
-/// The first fifteen fields are the keys fixed by `DESIGN.md`; the rest are extras (all with
+/// The first fifteen fields are the keys fixed by `docs/formats.md`; the rest are extras (all with
 /// serde defaults, so a file holding only the fixed keys still parses). Object counts and the
 /// four map scores cover foreground objects only; `background` scores the background objects.
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
@@ -329,7 +329,7 @@ pub struct GivenUpEntry {
     pub cause: String,
 }
 
-/// The keys `DESIGN.md` requires in `metrics.json`.
+/// The keys `docs/formats.md` requires in `metrics.json`.
 pub const REQUIRED_KEYS: [&str; 15] = [
     "scene",
     "planner",

@@ -1,4 +1,4 @@
-//! Scene files (`config/scenes/*.toml`, format fixed in DESIGN.md "Scene files"): parsing, full
+//! Scene files (`config/scenes/*.toml`, format fixed in `docs/formats.md` "Scene files"): parsing, full
 //! validation, built-in scenes and ground-truth clusters.
 //!
 //! A scene is an axis-aligned room (floor at z = 0, walls around it) with upright objects (boxes or

@@ -246,7 +246,7 @@ pub struct ListError {
 mod tests {
     use super::*;
 
-    /// `?` into `anyhow` (the nodes crate) needs this.
+    /// `?` into `anyhow` (the app crate) needs this.
     fn is_send_sync_static<E: std::error::Error + Send + Sync + 'static>() {}
 
     #[test]

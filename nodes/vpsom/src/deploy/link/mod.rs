@@ -25,8 +25,8 @@
 //! the hosts are apart, or overwritten in the tunnel's buffers, is lost (counted per topic from
 //! the sequence numbers). A local publisher never waits for the tunnel.
 //!
-//! The tunnel needs zenoh (about 300 crates), so it is the cargo feature `link` of `nodes` and
-//! `rt_tests`, off by default: `cargo build --release --features link`. Without it, `--link`
+//! The tunnel needs zenoh (about 300 crates), so it is the cargo feature `link` of `vpsom` and
+//! `rt_tests`, off by default: `cargo build --release -p vpsom --features link`. Without it, `--link`
 //! is refused with [`LinkError::NotBuilt`].
 
 #[cfg(feature = "link")]
@@ -119,7 +119,7 @@ pub enum LinkError {
     /// This binary was built without the link (the `link` cargo feature: zenoh is large and
     /// only multi-host runs need it).
     #[error(
-        "--link: this vpsom was built without the `link` feature; build it with `cargo build --release --features link`"
+        "--link: this vpsom was built without the `link` feature; build it with `cargo build --release -p vpsom --features link`"
     )]
     NotBuilt,
 }
