@@ -4,8 +4,9 @@
 //! so Cargo already refuses a use of a crate they do not depend on. Two things remain:
 //! - **Their manifests**: a logic crate depends only on `shm_types`, `settings`, the other logic
 //!   crates below it and the maths/utility crates of [`ALLOWED_DEPS`]; never on the runtime,
-//!   iceoryx2, zenoh or the app; and `mapper` and `planner` never on `sim` or `eval` (no ground
-//!   truth leaks). Checked on each `Cargo.toml`.
+//!   iceoryx2, zenoh or the app (nor on `shm_types`' `ipc` feature, which is iceoryx2); and
+//!   `mapper` and `planner` never on `sim` or `eval` (no ground truth leaks). Checked on each
+//!   `Cargo.toml`.
 //! - **`std` inside them**: no threads, no OS clock and no files ([`FORBIDDEN_STD`]:
 //!   `std::thread`, `std::time::Instant`, `std::time::SystemTime`, `std::time::UNIX_EPOCH`,
 //!   `std::fs`), however reached (grouped, renamed, globbed, in a macro body). The files that
@@ -341,27 +342,45 @@ fn uses_of(rel: &str, source: &str) -> Result<Vec<Use>, String> {
     Ok(c.uses)
 }
 
-/// The `[dependencies]` of a logic crate's manifest (as written, `-` kept).
-fn dependencies(krate: &str) -> BTreeSet<String> {
+/// The `[dependencies]` of a logic crate's manifest (as written, `-` kept), each with the
+/// features it turns on.
+fn dependencies(krate: &str) -> BTreeMap<String, Vec<String>> {
     let manifest = nodes_dir().join(krate).join("Cargo.toml");
     let text = std::fs::read_to_string(&manifest).expect("logic crate manifest");
     let table: toml::Table = toml::from_str(&text).expect("valid Cargo.toml");
-    table
-        .get("dependencies")
-        .and_then(|d| d.as_table())
-        .map(|d| d.keys().cloned().collect())
-        .unwrap_or_default()
+    let Some(deps) = table.get("dependencies").and_then(|d| d.as_table()) else {
+        return BTreeMap::new();
+    };
+    deps.iter()
+        .map(|(name, spec)| {
+            let features = spec
+                .get("features")
+                .and_then(|f| f.as_array())
+                .map(|f| {
+                    f.iter()
+                        .filter_map(|x| x.as_str().map(String::from))
+                        .collect()
+                })
+                .unwrap_or_default();
+            (name.clone(), features)
+        })
+        .collect()
 }
 
 /// The manifest rules broken by `krate` with dependencies `deps`.
-fn manifest_violations(krate: &str, deps: &BTreeSet<String>) -> Vec<String> {
+fn manifest_violations(krate: &str, deps: &BTreeMap<String, Vec<String>>) -> Vec<String> {
     let below: Vec<&str> = LOGIC_ORDER
         .iter()
         .take_while(|c| **c != krate)
         .copied()
         .collect();
     let mut out = Vec::new();
-    for d in deps {
+    for (d, features) in deps {
+        if d == "shm_types" && features.iter().any(|f| f == "ipc") {
+            out.push(format!(
+                "{krate} turns on shm_types' `ipc` feature: that is iceoryx2, for the hosts only"
+            ));
+        }
         if !ALLOWED_DEPS.contains(&d.as_str()) && !below.contains(&d.as_str()) {
             out.push(format!(
                 "{krate} depends on `{d}`: not a logic-layer crate (hosting crates such as the \
@@ -502,7 +521,12 @@ fn planted_violations_are_reported() {
 
 #[test]
 fn planted_dependencies_are_reported() {
-    let deps = |names: &[&str]| names.iter().map(|s| s.to_string()).collect::<BTreeSet<_>>();
+    let deps = |names: &[&str]| {
+        names
+            .iter()
+            .map(|s| (s.to_string(), Vec::new()))
+            .collect::<BTreeMap<_, _>>()
+    };
     assert!(manifest_violations("eval", &deps(&["sim", "geom", "serde"])).is_empty());
     let v = manifest_violations("mapper", &deps(&["sim", "runtime", "iceoryx2", "geom"]));
     assert_eq!(v.len(), 3, "{v:#?}"); // sim (ground truth), runtime, iceoryx2
@@ -510,4 +534,6 @@ fn planted_dependencies_are_reported() {
     assert_eq!(manifest_violations("planner", &deps(&["eval"])).len(), 2);
     assert_eq!(manifest_violations("geom", &deps(&["sim"])).len(), 1);
     assert_eq!(manifest_violations("sim", &deps(&["zenoh"])).len(), 1);
+    let ipc = BTreeMap::from([("shm_types".to_string(), vec!["ipc".to_string()])]);
+    assert_eq!(manifest_violations("planner", &ipc).len(), 1);
 }
