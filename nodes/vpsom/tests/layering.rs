@@ -66,7 +66,7 @@ const FORBIDDEN_STD: [&str; 5] = [
 ];
 
 /// Files of logic crates that still use `std::fs`, with the reason. Nothing else may.
-const FS_ALLOWED: [(&str, &str); 5] = [
+const FS_ALLOWED: [(&str, &str); 4] = [
     ("sim/scene.rs", "Scene::load reads a scene file by path"),
     ("eval/lib.rs", "writes a run's metrics.json and map.json"),
     ("eval/plot.rs", "writes the Figure-10 PNG"),
@@ -74,7 +74,6 @@ const FS_ALLOWED: [(&str, &str); 5] = [
         "eval/report.rs",
         "reads saved metrics.json trees, writes the report",
     ),
-    ("eval/mapfile.rs", "reads a saved map.json to re-score it"),
 ];
 
 /// `true` if `path` is `prefix` or lies below it (segment-wise).
