@@ -83,7 +83,7 @@ fn free_port() -> u16 {
 /// A config file for one host: ideal sensing (this tests the link, not the sensing), the
 /// host's iceoryx2 domain, and `extra`.
 fn host_config(dir: &Path, host: &str, domain: &str, extra: &str) -> PathBuf {
-    let ideal = include_str!("../../config/sensing-ideal.toml");
+    let ideal = include_str!("../../../config/sensing-ideal.toml");
     let path = dir.join(format!("{host}.toml"));
     // `domain` goes into BUFFERS' [ports] table (a TOML table is opened once).
     let ports = BUFFERS.replacen("[ports]\n", &format!("[ports]\ndomain = \"{domain}\"\n"), 1);

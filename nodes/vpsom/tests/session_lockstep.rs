@@ -109,7 +109,7 @@ fn vpsom_trace_reads_back_in_python_mcap() {
     let (r, dir, mcap) = recorded_session("py");
     let rec = r.recorder.clone().expect("recorded");
     let script =
-        PathBuf::from(env!("CARGO_MANIFEST_DIR")).join("../runtime/tests/py/check_mcap.py");
+        PathBuf::from(env!("CARGO_MANIFEST_DIR")).join("../../runtime/tests/py/check_mcap.py");
     let mut cmd = std::process::Command::new(py);
     cmd.arg(&script).arg(&mcap);
     for t in [topic::DEPTH, topic::MAP, topic::DECISIONS, topic::NAV_GOAL] {

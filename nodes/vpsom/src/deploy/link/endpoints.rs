@@ -199,7 +199,7 @@ mod tests {
     fn the_shipped_tls_example_is_a_valid_zenoh_config_and_keeps_the_link_endpoints() {
         let file = Path::new(concat!(
             env!("CARGO_MANIFEST_DIR"),
-            "/../config/zenoh-link-tls.json5"
+            "/../../config/zenoh-link-tls.json5"
         ));
         let cfg = zenoh_config(Some(file), &[parse_endpoint("tls/robot:7447").unwrap()])
             .unwrap_or_else(|e| panic!("{e}"));
