@@ -10,7 +10,7 @@ use nodes::app::replay::{self, ReplaySpec};
 use nodes::config::Config;
 use nodes::sim::Scene;
 use runtime::recorder::schemas::topic;
-use runtime::recorder::{WriterHook, inspect};
+use runtime::recorder::{RecorderError, WriterHook, inspect};
 use std::sync::Arc;
 use std::sync::atomic::{AtomicU64, Ordering};
 use std::time::Duration;
@@ -125,5 +125,43 @@ fn a_slow_writer_makes_lockstep_wait_and_the_trace_is_complete_and_replays_exact
         );
     }
     assert_eq!(check.frames, info.count(topic::DEPTH));
+    let _ = std::fs::remove_dir_all(&dir);
+}
+
+/// A writer that dies mid-session (here a panicking hook; on a robot an I/O error) ends a lockstep
+/// session early with the recorder's error: the host neither waits forever nor runs to the end
+/// for a trace that cannot be written.
+#[test]
+fn a_writer_that_dies_ends_the_lockstep_session_with_its_error() {
+    let dir = std::env::temp_dir().join(format!("vpsom-dead-writer-{}", std::process::id()));
+    std::fs::create_dir_all(&dir).unwrap();
+    let base = Config::ideal_sensing().with_camera(160, 120, 10.0);
+    let spec = SessionSpec {
+        scene: Scene::builtin("paper-scene-1").unwrap(),
+        config: lockstep::config_for(&base, "vpsom").unwrap(),
+        seed: 3,
+        label: "vpsom".into(),
+        max_sim_s: 12.0,
+        record: Some(dir.join("trace.mcap")),
+    };
+    let calls = Arc::new(AtomicU64::new(0));
+    let c = Arc::clone(&calls);
+    let hook = WriterHook::new(move || {
+        if c.fetch_add(1, Ordering::SeqCst) == 200 {
+            panic!("test: the writer dies on its 201st message");
+        }
+    });
+    let mut last_s = 0.0;
+    let r = lockstep::run_session_with_writer_hook(&spec, hook, |p| last_s = p.sim_s);
+    match r {
+        Err(lockstep::SessionError::Recorder(RecorderError::Panicked { path })) => {
+            assert_eq!(path, dir.join("trace.mcap"));
+        }
+        other => panic!(
+            "expected the recorder's error, got {:?}",
+            other.map(|r| r.metrics)
+        ),
+    }
+    assert!(last_s < 12.0, "the session ran to its end ({last_s} s)");
     let _ = std::fs::remove_dir_all(&dir);
 }
