@@ -6,6 +6,11 @@
 //! step), camera frames at `rates.camera_hz`, map publication at `rates.map_hz`, LBV at
 //! `planner.lbv_hz`. GBV jobs run inline (the result is available on the same step), which is
 //! what a host with an idle pool would see.
+//!
+//! A recorded session is complete: the recorder waits rather than drops
+//! ([`Overflow::Wait`](runtime::recorder::Overflow::Wait)), so a step's messages are queued
+//! before the simulated clock moves on, however far behind the writer is (a slow disk makes the
+//! run slower, never the trace shorter), and `vpsom replay --check` has every input.
 
 use crate::config::Config;
 use crate::eval::{self, GtObject, MatchParams, Metrics, RunInfo, SessionLog};
@@ -150,6 +155,25 @@ pub fn room(scene: &Scene) -> eval::Room {
 /// Run one session to termination (or `max_sim_s`), calling `progress` about once per second.
 pub fn run_session(
     spec: &SessionSpec,
+    progress: impl FnMut(&Progress),
+) -> Result<SessionResult, SessionError> {
+    session(spec, None, progress)
+}
+
+/// [`run_session`] with a hook that the recorder's writer thread calls before each message it
+/// writes: tests make the writer slow with it (a busy disk) and check that the trace is still
+/// complete. Without `spec.record` the hook is never called.
+pub fn run_session_with_writer_hook(
+    spec: &SessionSpec,
+    hook: runtime::recorder::WriterHook,
+    progress: impl FnMut(&Progress),
+) -> Result<SessionResult, SessionError> {
+    session(spec, Some(hook), progress)
+}
+
+fn session(
+    spec: &SessionSpec,
+    writer_hook: Option<runtime::recorder::WriterHook>,
     mut progress: impl FnMut(&Progress),
 ) -> Result<SessionResult, SessionError> {
     let cfg = &spec.config;
@@ -167,6 +191,9 @@ pub fn run_session(
             &cfg.recorder,
             runtime::recorder::RecorderSetup {
                 host: "lockstep".into(),
+                // The clock is simulated: wait for the writer, never drop.
+                overflow: runtime::recorder::Overflow::Wait,
+                writer_hook,
                 ..super::deploy::recorder_setup(&spec.scene, cfg)
             },
         )?),
@@ -187,7 +214,11 @@ pub fn run_session(
     let mut frames = 0u64;
     let mut finished: Option<Summary> = None;
 
-    while finished.is_none() && sim.time_ns() <= max_ns {
+    // A writer that stopped (an I/O error) ends the session: `finish` below returns its error.
+    let writing = |r: &Option<runtime::recorder::RecorderHandle>| {
+        r.as_ref().is_none_or(|r| !r.writer_stopped())
+    };
+    while finished.is_none() && sim.time_ns() <= max_ns && writing(&rec) {
         let t = sim.time_ns();
         sim.robot_state(&mut state);
         if t >= next_cam {

@@ -670,6 +670,8 @@ pub fn replay(spec: &ReplaySpec) -> Result<ReplayReport, ReplayError> {
                     hfov_deg: cfg.camera.hfov_deg,
                     vfov_deg: cfg.camera.vfov_deg,
                 },
+                // Offline: the new trace waits for its writer rather than lose a message.
+                overflow: runtime::recorder::Overflow::Wait,
                 ..Default::default()
             };
             Some(Recorder::create(

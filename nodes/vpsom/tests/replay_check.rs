@@ -14,12 +14,9 @@ fn recorded(tag: &str) -> (PathBuf, Config) {
     let dir = std::env::temp_dir().join(format!("vpsom-replay-{tag}-{}", std::process::id()));
     std::fs::create_dir_all(&dir).unwrap();
     let base = Config::ideal_sensing().with_camera(160, 120, 10.0);
-    let mut cfg = lockstep::config_for(&base, "vpsom").unwrap();
-    // The lockstep host never waits for the recorder: room for everything, so that no input is
-    // dropped on a loaded machine (an exact check refuses a trace with drops).
-    cfg.recorder.queue_len = 1 << 16;
-    cfg.recorder.pool_len = 256;
-    cfg.recorder.depth_queue_len = 64;
+    // The recorder's default room: the lockstep host waits for the writer rather than drop, so
+    // a loaded machine loses no input (an exact check refuses a trace with drops; issue 37).
+    let cfg = lockstep::config_for(&base, "vpsom").unwrap();
     let spec = SessionSpec {
         scene: Scene::builtin("paper-scene-1").unwrap(),
         config: cfg.clone(),

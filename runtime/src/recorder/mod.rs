@@ -39,6 +39,15 @@
 //! per topic ([`RecorderHandle::dropped`]) and written into the file: periodically on
 //! `/recorder/stats` and at finish as the MCAP Metadata record `recorder_stats`.
 //!
+//! That is [`Overflow::Drop`], the default and what a live host uses: no real-time thread ever
+//! waits for a disk. A host on a simulated clock (lockstep, replay) chooses [`Overflow::Wait`] in
+//! [`RecorderSetup::overflow`] (in code, never from a config key): a `record_*` call then waits
+//! until the channel, the pool or the depth ring has room, so nothing is dropped however far the
+//! writer falls behind, and the host's clock does not advance until the step's messages are
+//! queued. A message is then dropped (and counted) only once the writer thread has stopped (an
+//! I/O error, which [`Recorder::finish`] returns; [`RecorderHandle::writer_stopped`] tells the
+//! host to stop early).
+//!
 //! # Crash safety
 //! Chunks are bounded by size (`chunk_size_kb`) and by age (`flush_interval_s`): the writer
 //! finishes and flushes a chunk once it is older than the interval, so after SIGKILL everything up
@@ -106,7 +115,7 @@ mod writer;
 pub use foxglove;
 
 use crate::config::{Checker, ConfigError};
-use crossbeam::channel::{Receiver, Sender, TrySendError};
+use crossbeam::channel::{Receiver, RecvTimeoutError, Sender, TrySendError};
 use crossbeam::queue::ArrayQueue;
 use serde::{Deserialize, Serialize};
 use shm_types::{
@@ -115,8 +124,9 @@ use shm_types::{
 };
 use std::path::{Path, PathBuf};
 use std::sync::Arc;
-use std::sync::atomic::{AtomicU64, Ordering};
+use std::sync::atomic::{AtomicBool, AtomicU64, Ordering};
 use std::thread::JoinHandle;
+use std::time::Duration;
 
 /// Chunk compression.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Deserialize)]
@@ -147,6 +157,54 @@ impl Profile {
             Profile::Replay => "replay",
             Profile::View => "view",
         }
+    }
+}
+
+/// What a `record_*` call does when the writer is behind and there is no room for the message
+/// (the channel, its pool or the depth ring is full). The host chooses it
+/// ([`RecorderSetup::overflow`]); no config key does.
+#[derive(Debug, Clone, Copy, Default, PartialEq, Eq)]
+pub enum Overflow {
+    /// Drop the message (for depth: the oldest queued frame) and count it; never wait. For live
+    /// hosts, whose real-time threads record.
+    #[default]
+    Drop,
+    /// Wait until the writer has made room; nothing is dropped while the writer runs. For hosts
+    /// on a simulated clock (lockstep, replay), whose traces must hold every input.
+    Wait,
+}
+
+impl Overflow {
+    /// `drop` or `wait` (the session metadata's `overflow`).
+    pub fn name(self) -> &'static str {
+        match self {
+            Overflow::Drop => "drop",
+            Overflow::Wait => "wait",
+        }
+    }
+}
+
+/// For tests: a function the writer thread calls before it writes each message (a test makes
+/// the writer slow, or stalls it, to see what the producers do when it falls behind).
+#[derive(Clone)]
+pub struct WriterHook(pub Arc<dyn Fn() + Send + Sync>);
+
+impl WriterHook {
+    /// A hook that calls `f`.
+    pub fn new(f: impl Fn() + Send + Sync + 'static) -> Self {
+        Self(Arc::new(f))
+    }
+}
+
+impl std::fmt::Debug for WriterHook {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        f.write_str("WriterHook(..)")
+    }
+}
+
+impl PartialEq for WriterHook {
+    fn eq(&self, other: &Self) -> bool {
+        Arc::ptr_eq(&self.0, &other.0)
     }
 }
 
@@ -338,6 +396,11 @@ pub struct RecorderSetup {
     /// process, simulated clock: `vpsom replay --check` reproduces it exactly) or `live`
     /// (processes on real clocks: reproduced to a tolerance); empty if unknown.
     pub host: String,
+    /// Drop (live hosts) or wait (simulated clocks) when the writer is behind (MCAP metadata
+    /// `session`, key `overflow`).
+    pub overflow: Overflow,
+    /// For tests: called by the writer thread before each message it writes.
+    pub writer_hook: Option<WriterHook>,
 }
 
 /// Latency of one node or path over the last summary period.
@@ -521,28 +584,46 @@ impl DropCounts {
     }
 }
 
-/// A fixed set of preallocated boxes.
+/// How often a producer waiting for a pooled box ([`Overflow::Wait`]) looks whether the writer
+/// has stopped (a box given back wakes it at once).
+const STOPPED_POLL: Duration = Duration::from_millis(50);
+
+/// A fixed set of preallocated boxes (a bounded channel of them, so a producer can wait for one).
 #[derive(Debug)]
 struct Pool<T> {
-    free: ArrayQueue<Box<T>>,
+    give: Sender<Box<T>>,
+    free: Receiver<Box<T>>,
 }
 
 impl<T: ZeroValid> Pool<T> {
     fn new(n: usize) -> Self {
-        let free = ArrayQueue::new(n);
+        let (give, free) = crossbeam::channel::bounded(n);
         for _ in 0..n {
-            // Cannot fail: the queue has exactly n slots.
-            let _ = free.push(boxed_zeroed::<T>());
+            // Cannot fail: the channel has exactly n slots.
+            let _ = give.try_send(boxed_zeroed::<T>());
         }
-        Self { free }
+        Self { give, free }
     }
     fn take(&self) -> Option<Box<T>> {
-        self.free.pop()
+        self.free.try_recv().ok()
+    }
+    /// A box, waiting for one to be given back; `None` once `stopped` is set and none is free.
+    fn take_waiting(&self, stopped: &AtomicBool) -> Option<Box<T>> {
+        loop {
+            if stopped.load(Ordering::Acquire) {
+                return self.take();
+            }
+            match self.free.recv_timeout(STOPPED_POLL) {
+                Ok(b) => return Some(b),
+                // The pool holds its own sender: never disconnected.
+                Err(RecvTimeoutError::Timeout | RecvTimeoutError::Disconnected) => {}
+            }
+        }
     }
     fn give(&self, b: Box<T>) {
         // The pool never holds more than it was built with, so this cannot be full; if it ever
         // were, the box is simply freed.
-        let _ = self.free.push(b);
+        let _ = self.give.try_send(b);
     }
 }
 
@@ -550,6 +631,9 @@ impl<T: ZeroValid> Pool<T> {
 #[derive(Debug)]
 struct Shared {
     counters: Counters,
+    overflow: Overflow,
+    /// Set when the writer thread has ended (finished, failed or panicked).
+    writer_stopped: AtomicBool,
     depth_ready: ArrayQueue<Box<DepthFrame>>,
     depth_pool: Pool<DepthFrame>,
     detections_pool: Pool<Detections>,
@@ -558,6 +642,31 @@ struct Shared {
 }
 
 impl Shared {
+    fn new(overflow: Overflow, depth_queue_len: usize, pool_len: usize) -> Self {
+        Self {
+            counters: Counters::default(),
+            overflow,
+            writer_stopped: AtomicBool::new(false),
+            // Waiting, the ring holds every depth buffer, so no queued frame is ever replaced.
+            depth_ready: ArrayQueue::new(match overflow {
+                Overflow::Drop => depth_queue_len,
+                Overflow::Wait => depth_queue_len + 1,
+            }),
+            depth_pool: Pool::new(depth_queue_len + 1),
+            detections_pool: Pool::new(pool_len),
+            map_pool: Pool::new(pool_len),
+            decision_pool: Pool::new(pool_len),
+        }
+    }
+
+    /// A pooled box: at once or dropped ([`Overflow::Drop`]), or waiting for one.
+    fn take<T: ZeroValid>(&self, pool: &Pool<T>) -> Option<Box<T>> {
+        match self.overflow {
+            Overflow::Drop => pool.take(),
+            Overflow::Wait => pool.take_waiting(&self.writer_stopped),
+        }
+    }
+
     fn drop_counts(&self) -> DropCounts {
         let mut d = DropCounts::default();
         for k in Kind::ALL {
@@ -652,8 +761,9 @@ pub struct RecorderSummary {
     pub writer_cpu_ns: u64,
 }
 
-/// Cheap, cloneable producer side of a [`Recorder`]. Every method returns at once; a message that
-/// cannot be queued is dropped and counted.
+/// Cheap, cloneable producer side of a [`Recorder`]. With [`Overflow::Drop`] every method returns
+/// at once and a message that cannot be queued is dropped and counted; with [`Overflow::Wait`] a
+/// method waits for room (see the module docs, "Falling behind").
 #[derive(Debug, Clone)]
 pub struct RecorderHandle {
     tx: Sender<Msg>,
@@ -665,13 +775,28 @@ pub struct RecorderHandle {
 impl RecorderHandle {
     fn push(&self, kind: Kind, msg: Msg) {
         self.shared.counters.offer(kind);
-        match self.tx.try_send(msg) {
-            Ok(()) => {}
-            Err(TrySendError::Full(m) | TrySendError::Disconnected(m)) => {
-                self.shared.counters.drop_one(kind);
-                self.recycle(m);
-            }
+        let refused = match self.shared.overflow {
+            Overflow::Drop => match self.tx.try_send(msg) {
+                Ok(()) => None,
+                Err(TrySendError::Full(m) | TrySendError::Disconnected(m)) => Some(m),
+            },
+            // Fails only once the writer thread has ended.
+            Overflow::Wait => self.tx.send(msg).err().map(|e| e.into_inner()),
+        };
+        if let Some(m) = refused {
+            self.shared.counters.drop_one(kind);
+            self.recycle(m);
         }
+    }
+
+    /// A pooled box for `kind`, or the drop counted.
+    fn take<T: ZeroValid>(&self, kind: Kind, pool: &Pool<T>) -> Option<Box<T>> {
+        let b = self.shared.take(pool);
+        if b.is_none() {
+            self.shared.counters.offer(kind);
+            self.shared.counters.drop_one(kind);
+        }
+        b
     }
 
     fn recycle(&self, m: Msg) {
@@ -684,17 +809,27 @@ impl RecorderHandle {
     }
 
     /// Record a depth frame (`/camera/depth`). Copies the used pixels into a preallocated buffer;
-    /// if all are queued, the oldest queued frame is dropped (and counted) to make room.
+    /// if all are queued, the oldest queued frame is dropped (and counted) to make room
+    /// ([`Overflow::Drop`]), or the call waits until the writer has taken one ([`Overflow::Wait`]).
     pub fn record_depth(&self, frame: &DepthFrame) {
         let s = &*self.shared;
         s.counters.offer(Kind::Depth);
-        let mut buf = match s.depth_pool.take().or_else(|| {
-            let old = s.depth_ready.pop();
-            if old.is_some() {
-                s.counters.drop_one(Kind::Depth);
-            }
-            old
-        }) {
+        if self.writer_stopped() {
+            // Nothing would ever write it.
+            s.counters.drop_one(Kind::Depth);
+            return;
+        }
+        let buf = match s.overflow {
+            Overflow::Drop => s.depth_pool.take().or_else(|| {
+                let old = s.depth_ready.pop();
+                if old.is_some() {
+                    s.counters.drop_one(Kind::Depth);
+                }
+                old
+            }),
+            Overflow::Wait => s.depth_pool.take_waiting(&s.writer_stopped),
+        };
+        let mut buf = match buf {
             Some(b) => b,
             None => {
                 // Every buffer is in the writer's or another producer's hands.
@@ -714,15 +849,9 @@ impl RecorderHandle {
     /// Record detections (`/detections`, and `/camera/detections` drawn on the depth image of
     /// the frame they belong to), copied into a pooled buffer.
     pub fn record_detections(&self, d: &Detections) {
-        match self.shared.detections_pool.take() {
-            Some(mut b) => {
-                convert::copy_detections(d, &mut b);
-                self.push(Kind::Detections, Msg::Detections(b));
-            }
-            None => {
-                self.shared.counters.offer(Kind::Detections);
-                self.shared.counters.drop_one(Kind::Detections);
-            }
+        if let Some(mut b) = self.take(Kind::Detections, &self.shared.detections_pool) {
+            convert::copy_detections(d, &mut b);
+            self.push(Kind::Detections, Msg::Detections(b));
         }
     }
 
@@ -752,30 +881,18 @@ impl RecorderHandle {
 
     /// Record an object map (`/map/objects`), copied into a pooled buffer.
     pub fn record_map(&self, map: &ObjectMap) {
-        match self.shared.map_pool.take() {
-            Some(mut b) => {
-                b.copy_from(map);
-                self.push(Kind::Map, Msg::Map(b));
-            }
-            None => {
-                self.shared.counters.offer(Kind::Map);
-                self.shared.counters.drop_one(Kind::Map);
-            }
+        if let Some(mut b) = self.take(Kind::Map, &self.shared.map_pool) {
+            b.copy_from(map);
+            self.push(Kind::Map, Msg::Map(b));
         }
     }
 
     /// Record a planner decision (`/planner/decisions` and `/planner/gbv` or `/planner/lbv`),
     /// copied into a pooled buffer.
     pub fn record_decision(&self, d: &PlannerDecision) {
-        match self.shared.decision_pool.take() {
-            Some(mut b) => {
-                convert::copy_decision(d, &mut b);
-                self.push(Kind::Decision, Msg::Decision(b));
-            }
-            None => {
-                self.shared.counters.offer(Kind::Decision);
-                self.shared.counters.drop_one(Kind::Decision);
-            }
+        if let Some(mut b) = self.take(Kind::Decision, &self.shared.decision_pool) {
+            convert::copy_decision(d, &mut b);
+            self.push(Kind::Decision, Msg::Decision(b));
         }
     }
 
@@ -830,6 +947,12 @@ impl RecorderHandle {
     /// Drops so far of one kind.
     pub fn dropped(&self, kind: Kind) -> u64 {
         self.shared.counters.dropped[kind as usize].load(Ordering::Relaxed)
+    }
+
+    /// Whether the writer thread has ended: finished, or failed (the error is what
+    /// [`Recorder::finish`] returns). Nothing recorded afterwards is written.
+    pub fn writer_stopped(&self) -> bool {
+        self.shared.writer_stopped.load(Ordering::Acquire)
     }
 }
 
@@ -931,20 +1054,21 @@ impl Recorder {
     ) -> Result<Recorder, RecorderError> {
         let (tx, rx): (Sender<Msg>, Receiver<Msg>) = crossbeam::channel::bounded(cfg.queue_len);
         let (wake, wake_rx) = crossbeam::channel::bounded(1);
-        let shared = Arc::new(Shared {
-            counters: Counters::default(),
-            depth_ready: ArrayQueue::new(cfg.depth_queue_len),
-            depth_pool: Pool::new(cfg.depth_queue_len + 1),
-            detections_pool: Pool::new(cfg.pool_len),
-            map_pool: Pool::new(cfg.pool_len),
-            decision_pool: Pool::new(cfg.pool_len),
-        });
+        let shared = Arc::new(Shared::new(
+            setup.overflow,
+            cfg.depth_queue_len,
+            cfg.pool_len,
+        ));
         let w = writer::WriterState::open(path, cfg, &setup)?;
         let live_port = w.live_port();
         let sh = Arc::clone(&shared);
         let thread = std::thread::Builder::new()
             .name("recorder".into())
-            .spawn(move || w.run(rx, wake_rx, sh))
+            .spawn(move || {
+                // Tells waiting producers when the thread ends, also by a panic.
+                let _stopped = StoppedOnDrop(Arc::clone(&sh));
+                w.run(rx, wake_rx, sh)
+            })
             .map_err(RecorderError::Spawn)?;
         Ok(Recorder {
             handle: RecorderHandle { tx, wake, shared },
@@ -991,6 +1115,15 @@ impl Recorder {
                 path: self.path.clone(),
             }),
         }
+    }
+}
+
+/// Sets [`Shared::writer_stopped`] when the writer thread's body ends (returns or unwinds).
+struct StoppedOnDrop(Arc<Shared>);
+
+impl Drop for StoppedOnDrop {
+    fn drop(&mut self) {
+        self.0.writer_stopped.store(true, Ordering::Release);
     }
 }
 
@@ -1057,14 +1190,7 @@ mod tests {
         // No writer thread: the handle alone, so the ring's behaviour is exact.
         let (tx, _rx) = crossbeam::channel::bounded(4);
         let (wake, _wake_rx) = crossbeam::channel::bounded(1);
-        let shared = Arc::new(Shared {
-            counters: Counters::default(),
-            depth_ready: ArrayQueue::new(2),
-            depth_pool: Pool::new(3),
-            detections_pool: Pool::new(1),
-            map_pool: Pool::new(1),
-            decision_pool: Pool::new(1),
-        });
+        let shared = Arc::new(Shared::new(Overflow::Drop, 2, 1));
         let h = RecorderHandle {
             tx,
             wake,

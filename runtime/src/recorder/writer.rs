@@ -7,7 +7,7 @@ use super::messages::{RecorderStats, TopicCounts};
 use super::schemas::{self, SESSION_METADATA, STATS_METADATA, topic};
 use super::{
     Compression, DropCounts, MountGeometry, Msg, RecorderConfig, RecorderError, RecorderSetup,
-    RecorderSummary, Shared,
+    RecorderSummary, Shared, WriterHook,
 };
 use crossbeam::channel::{Receiver, TryRecvError};
 use foxglove::Encode;
@@ -107,6 +107,8 @@ pub(super) struct WriterState {
     last_log_ns: u64,
     traj: Trajectory,
     truth_traj: Trajectory,
+    /// For tests: called before each message is written.
+    hook: Option<WriterHook>,
 }
 
 impl std::fmt::Debug for WriterState {
@@ -214,6 +216,7 @@ impl WriterState {
                 ),
                 ("truth_objects".to_string(), setup.truth.len().to_string()),
                 ("host".to_string(), setup.host.clone()),
+                ("overflow".to_string(), setup.overflow.name().to_string()),
             ]),
         };
         mcap.write_metadata(&session).map_err(mcap_err)?;
@@ -233,6 +236,7 @@ impl WriterState {
             last_log_ns: 0,
             traj: Trajectory::default(),
             truth_traj: Trajectory::default(),
+            hook: setup.writer_hook.clone(),
         };
         if !setup.truth.is_empty() {
             w.emit(topic::TRUTH_OBJECTS, 0, 0, || {
@@ -304,7 +308,17 @@ impl WriterState {
         }
     }
 
+    /// Call the test hook, if any, before a message is written.
+    fn before_write(&self) {
+        if let Some(h) = &self.hook {
+            (h.0)();
+        }
+    }
+
     fn handle(&mut self, m: Msg, shared: &Shared) -> Result<(), RecorderError> {
+        if !matches!(m, Msg::Finish) {
+            self.before_write();
+        }
         let mount = self.mount;
         match m {
             Msg::Finish => {}
@@ -420,6 +434,7 @@ impl WriterState {
     }
 
     fn depth(&mut self, f: &DepthFrame) -> Result<(), RecorderError> {
+        self.before_write();
         let k = self.decimation;
         let (t, p) = (f.header.sim_time_ns, f.header.stamp_ns);
         self.emit(topic::DEPTH, t, p, || convert::depth_image(f, k))?;

@@ -8,7 +8,9 @@ use crate::config::Config;
 use crate::sim::Scene;
 use crate::topics;
 use runtime::ports::{PortContext, Subscriber};
-use runtime::recorder::{MountGeometry, Recorder, RecorderHandle, RecorderSetup, TruthBox};
+use runtime::recorder::{
+    MountGeometry, Overflow, Recorder, RecorderHandle, RecorderSetup, TruthBox,
+};
 use shm_types::{
     DeadlineEvent, DepthFrame, Detections, NavGoal, NeckGoal, NodeHealth, ObjectMap, OccupancyGrid,
     PlannerDecision, RobotState,
@@ -48,6 +50,9 @@ pub fn recorder_setup(scene: &Scene, cfg: &Config) -> RecorderSetup {
             .collect(),
         live_port: None,
         host: "live".into(),
+        // A live recorder never makes a real-time publisher wait: it drops and counts.
+        overflow: Overflow::Drop,
+        writer_hook: None,
     }
 }
 
@@ -92,6 +97,8 @@ impl RecorderHost {
                 truth: Vec::new(),
                 live_port: None,
                 host: "live".into(),
+                overflow: Overflow::Drop,
+                writer_hook: None,
             },
         };
         let setup = RecorderSetup {
