@@ -5,15 +5,15 @@
 //! --check` reproduces it exactly. (The live counterpart, a stalled writer that a publisher never
 //! waits for, is `runtime/tests/recorder_backpressure.rs`.)
 
-use vpsom::lockstep::{self, Progress, SessionSpec};
-use vpsom::replay::{self, ReplaySpec};
-use vpsom::config::Config;
-use vpsom::sim::Scene;
 use runtime::recorder::schemas::topic;
 use runtime::recorder::{RecorderError, WriterHook, inspect};
 use std::sync::Arc;
 use std::sync::atomic::{AtomicU64, Ordering};
 use std::time::Duration;
+use vpsom::config::Config;
+use vpsom::lockstep::{self, Progress, SessionSpec};
+use vpsom::replay::{self, ReplaySpec};
+use vpsom::sim::Scene;
 
 #[test]
 fn a_slow_writer_makes_lockstep_wait_and_the_trace_is_complete_and_replays_exactly() {
