@@ -237,7 +237,8 @@ fn python_driver_frames_are_mapped_and_its_nan_pose_frame_is_counted() {
     const SENT: u64 = 20;
     let python = std::env::var("VPSOM_PYTHON")
         .expect("VPSOM_PYTHON must name a Python with `iceoryx2==0.10.0` installed");
-    let driver = Path::new(env!("CARGO_MANIFEST_DIR")).join("../../shm_types/python/replay_driver.py");
+    let driver =
+        Path::new(env!("CARGO_MANIFEST_DIR")).join("../../shm_types/python/replay_driver.py");
     let dir = std::env::temp_dir().join(format!("vpsom-run-python-{}", std::process::id()));
     let ns = format!("py{}", std::process::id());
     let (child, lines, reader) = spawn_run(&dir, &ns, "mapper,planner,recorder");

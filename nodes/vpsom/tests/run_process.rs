@@ -32,7 +32,10 @@ fn multi_process_run_terminates_and_matches_lockstep_quality() {
     // Under GBV load (the pool kept busy with extra evaluations), planning rounds must still
     // get through and end the session.
     // Ideal sensing: this compares the hosts, not the sensing (see config/sensing-ideal.toml).
-    let ideal = concat!(env!("CARGO_MANIFEST_DIR"), "/../../config/sensing-ideal.toml");
+    let ideal = concat!(
+        env!("CARGO_MANIFEST_DIR"),
+        "/../../config/sensing-ideal.toml"
+    );
     let run = vpsom(&[
         "run",
         "--config",
