@@ -1,6 +1,6 @@
 //! `config/rt_tests.toml`: budgets and the defaults of every subcommand (flags override them).
 
-use runtime::config::{Checker, ConfigError, Defaults};
+use runtime::config::{Checker, ConfigError, Defaults, key, ranges};
 use runtime::executor::{ExecutorConfig, SchedPolicy};
 use serde::{Deserialize, Serialize};
 use std::path::{Path, PathBuf};
@@ -59,6 +59,21 @@ impl Default for Budgets {
     }
 }
 
+impl Budgets {
+    /// Range-check; `c` is at this table.
+    fn validate(&self, c: &Checker) -> Result<(), ConfigError> {
+        ranges!(c, self, {
+            wakeup_p99_us: positive,
+            wakeup_vs_cyclictest: in_range(0.1, 100.0),
+            ipc_p99_us: positive,
+            ipc_overhead_p50: in_range(0.1, 100.0),
+            ipc_flatness: in_range(0.0, 100.0),
+            [lbv_exec_p99_ms, e2e_p99_ms, soak_rss_growth_pct]: positive,
+        });
+        Ok(())
+    }
+}
+
 /// Scheduling of a measuring thread.
 #[derive(Debug, Clone, Serialize, Deserialize)]
 #[serde(deny_unknown_fields)]
@@ -99,21 +114,17 @@ impl Sched {
         }
     }
 
-    fn validate(&self, c: &Checker, at: &str) -> Result<(), ConfigError> {
-        c.require(
-            self.policy == "fifo" || self.policy == "other",
-            &format!("{at}.policy"),
-            &self.policy,
-            "must be \"fifo\" or \"other\"",
-        )?;
-        c.require(
-            (1..=98).contains(&self.priority),
-            &format!("{at}.priority"),
-            self.priority,
-            "must be in [1, 98]",
-        )?;
+    /// Range-check; `c` is at this table (`wakeup.sched`, `ipc.sched`).
+    fn validate(&self, c: &Checker) -> Result<(), ConfigError> {
+        ranges!(c, self, {
+            policy: require(
+                self.policy == "fifo" || self.policy == "other",
+                "must be \"fifo\" or \"other\"",
+            ),
+            priority: within(1, 98),
+        });
         for &cpu in &self.cpus {
-            c.require(cpu < 1024, &format!("{at}.cpus"), cpu, "must be below 1024")?;
+            c.require(cpu < 1024, &key!(c, cpus), cpu, "must be below 1024")?;
         }
         Ok(())
     }
@@ -143,6 +154,22 @@ impl Default for WakeupSettings {
     /// The `[wakeup]` section of the built-in `config/rt_tests.toml`.
     fn default() -> Self {
         RT_DEFAULTS.section("wakeup")
+    }
+}
+
+impl WakeupSettings {
+    /// Range-check; `c` is at this table.
+    fn validate(&self, c: &Checker) -> Result<(), ConfigError> {
+        ranges!(c, self, {
+            threads: count(1, 64),
+            period_us: within(50, 1_000_000),
+            distance_us: within(0, 1_000_000),
+            duration_s: in_range(0.1, 86_400.0),
+            spin_margin_us: within(0, 100_000),
+            hist_max_us: within(10, 1_000_000),
+            sched: section,
+        });
+        Ok(())
     }
 }
 
@@ -186,6 +213,28 @@ impl Default for IpcSettings {
     }
 }
 
+impl IpcSettings {
+    /// Range-check; `c` is at this table.
+    fn validate(&self, c: &Checker) -> Result<(), ConfigError> {
+        one_of(c, &key!(c, payloads), &self.payloads, &PAYLOADS)?;
+        one_of(c, &key!(c, modes), &self.modes, &["poll", "event"])?;
+        one_of(c, &key!(c, fills), &self.fills, &["zero", "reuse"])?;
+        for &r in &self.rates_hz {
+            c.in_range(&key!(c, rates_hz), r, 0.0, 100_000.0)?;
+        }
+        ranges!(c, self, {
+            paced_duration_s: in_range(0.05, 86_400.0),
+            flat_messages: within(1, 10_000_000),
+            link_flat_messages: within(1, 1_000_000),
+            rounds: within(1, 1000),
+            warmup_messages: within(0, 1000),
+            subscriber_buffer: count(1, 64),
+            sched: section,
+        });
+        Ok(())
+    }
+}
+
 /// The payload names `ipc` knows.
 pub const PAYLOADS: [&str; 4] = ["64B", "8KiB", "600KiB", "4MiB"];
 
@@ -222,6 +271,19 @@ impl Default for E2eSettings {
     }
 }
 
+impl E2eSettings {
+    /// Range-check; `c` is at this table.
+    fn validate(&self, c: &Checker) -> Result<(), ConfigError> {
+        ranges!(c, self, {
+            duration_s: in_range(0.1, 86_400.0),
+            warmup_s: in_range(0.0, 600.0),
+            time_scale: in_range(0.01, 100.0),
+            [report_every_s, rss_warmup_s]: in_range(0.0, 86_400.0),
+        });
+        Ok(())
+    }
+}
+
 /// `[stress]`.
 #[derive(Debug, Clone, Serialize, Deserialize)]
 #[serde(deny_unknown_fields)]
@@ -238,6 +300,17 @@ impl Default for StressSettings {
     /// The `[stress]` section of the built-in `config/rt_tests.toml`.
     fn default() -> Self {
         RT_DEFAULTS.section("stress")
+    }
+}
+
+impl StressSettings {
+    /// Range-check; `c` is at this table.
+    fn validate(&self, c: &Checker) -> Result<(), ConfigError> {
+        ranges!(c, self, {
+            cpu_workers: count(0, 1024),
+            memory_mb: count(0, 1 << 20),
+        });
+        Ok(())
     }
 }
 
@@ -271,90 +344,10 @@ impl Settings {
 
     /// Range-check every section.
     pub fn validate(&self, c: &Checker) -> Result<(), ConfigError> {
-        let b = &self.budgets;
-        c.positive("budgets.wakeup_p99_us", b.wakeup_p99_us)?;
-        c.in_range(
-            "budgets.wakeup_vs_cyclictest",
-            b.wakeup_vs_cyclictest,
-            0.1,
-            100.0,
-        )?;
-        c.positive("budgets.ipc_p99_us", b.ipc_p99_us)?;
-        c.in_range("budgets.ipc_overhead_p50", b.ipc_overhead_p50, 0.1, 100.0)?;
-        c.in_range("budgets.ipc_flatness", b.ipc_flatness, 0.0, 100.0)?;
-        c.positive("budgets.lbv_exec_p99_ms", b.lbv_exec_p99_ms)?;
-        c.positive("budgets.e2e_p99_ms", b.e2e_p99_ms)?;
-        c.positive("budgets.soak_rss_growth_pct", b.soak_rss_growth_pct)?;
-        let w = &self.wakeup;
-        c.count("wakeup.threads", w.threads, 1, 64)?;
-        c.require(
-            (50..=1_000_000).contains(&w.period_us),
-            "wakeup.period_us",
-            w.period_us,
-            "must be in [50, 1000000]",
-        )?;
-        c.require(
-            w.distance_us <= 1_000_000,
-            "wakeup.distance_us",
-            w.distance_us,
-            "must be in [0, 1000000]",
-        )?;
-        c.in_range("wakeup.duration_s", w.duration_s, 0.1, 86_400.0)?;
-        c.require(
-            w.spin_margin_us <= 100_000,
-            "wakeup.spin_margin_us",
-            w.spin_margin_us,
-            "must be in [0, 100000]",
-        )?;
-        c.require(
-            (10..=1_000_000).contains(&w.hist_max_us),
-            "wakeup.hist_max_us",
-            w.hist_max_us,
-            "must be in [10, 1000000]",
-        )?;
-        w.sched.validate(c, "wakeup.sched")?;
-        let i = &self.ipc;
-        one_of(c, "ipc.payloads", &i.payloads, &PAYLOADS)?;
-        one_of(c, "ipc.modes", &i.modes, &["poll", "event"])?;
-        one_of(c, "ipc.fills", &i.fills, &["zero", "reuse"])?;
-        for &r in &i.rates_hz {
-            c.in_range("ipc.rates_hz", r, 0.0, 100_000.0)?;
-        }
-        c.in_range("ipc.paced_duration_s", i.paced_duration_s, 0.05, 86_400.0)?;
-        c.require(
-            (1..=10_000_000).contains(&i.flat_messages),
-            "ipc.flat_messages",
-            i.flat_messages,
-            "must be in [1, 10000000]",
-        )?;
-        c.require(
-            (1..=1_000_000).contains(&i.link_flat_messages),
-            "ipc.link_flat_messages",
-            i.link_flat_messages,
-            "must be in [1, 1000000]",
-        )?;
-        c.require(
-            (1..=1000).contains(&i.rounds),
-            "ipc.rounds",
-            i.rounds,
-            "must be in [1, 1000]",
-        )?;
-        c.require(
-            i.warmup_messages <= 1000,
-            "ipc.warmup_messages",
-            i.warmup_messages,
-            "must be in [0, 1000]",
-        )?;
-        c.count("ipc.subscriber_buffer", i.subscriber_buffer, 1, 64)?;
-        i.sched.validate(c, "ipc.sched")?;
-        let e = &self.e2e;
-        c.in_range("e2e.duration_s", e.duration_s, 0.1, 86_400.0)?;
-        c.in_range("e2e.warmup_s", e.warmup_s, 0.0, 600.0)?;
-        c.in_range("e2e.time_scale", e.time_scale, 0.01, 100.0)?;
-        c.in_range("e2e.report_every_s", e.report_every_s, 0.0, 86_400.0)?;
-        c.in_range("e2e.rss_warmup_s", e.rss_warmup_s, 0.0, 86_400.0)?;
-        c.count("stress.cpu_workers", self.stress.cpu_workers, 0, 1024)?;
-        c.count("stress.memory_mb", self.stress.memory_mb, 0, 1 << 20)
+        ranges!(c, self, {
+            [budgets, wakeup, ipc, e2e, stress]: section,
+        });
+        Ok(())
     }
 }
 

@@ -90,28 +90,23 @@ impl Default for PoolConfig {
 }
 
 impl PoolConfig {
-    /// Range-check.
+    /// Range-check; `c` is at this table (`executor.pool`).
     pub fn validate(&self, c: &Checker) -> Result<(), ConfigError> {
-        c.count("executor.pool.threads", self.threads, 0, 256)?;
-        c.count("executor.pool.queue", self.queue, 1, 65_536)?;
-        c.require(
-            (0..=19).contains(&self.nice),
-            "executor.pool.nice",
-            self.nice,
-            "must be in [0, 19] (pool threads only lower their priority)",
-        )?;
-        c.require(
-            (1_000..=10_000_000).contains(&self.deadline_period_us),
-            "executor.pool.deadline_period_us",
-            self.deadline_period_us,
-            "must be in [1000, 10000000]",
-        )?;
-        c.require(
-            self.deadline_runtime_us >= 100 && self.deadline_runtime_us <= self.deadline_period_us,
-            "executor.pool.deadline_runtime_us",
-            self.deadline_runtime_us,
-            "must be in [100, deadline_period_us]",
-        )
+        settings::ranges!(c, self, {
+            threads: count(0, 256),
+            queue: count(1, 65_536),
+            nice: require(
+                (0..=19).contains(&self.nice),
+                "must be in [0, 19] (pool threads only lower their priority)",
+            ),
+            deadline_period_us: within(1_000, 10_000_000),
+            deadline_runtime_us: require(
+                self.deadline_runtime_us >= 100
+                    && self.deadline_runtime_us <= self.deadline_period_us,
+                "must be in [100, deadline_period_us]",
+            ),
+        });
+        Ok(())
     }
 }
 

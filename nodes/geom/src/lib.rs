@@ -48,42 +48,21 @@ impl CameraConfig {
         )
     }
 
-    /// Range-check the `[camera]` section.
+    /// Range-check the `[camera]` section and `[camera.mount]`.
     pub fn validate(&self, c: &settings::Checker) -> Result<(), settings::ConfigError> {
-        c.count(
-            "camera.width",
-            self.width as usize,
-            16,
-            shm_types::MAX_WIDTH,
-        )?;
-        c.count(
-            "camera.height",
-            self.height as usize,
-            16,
-            shm_types::MAX_HEIGHT,
-        )?;
-        c.in_range("camera.hfov_deg", self.hfov_deg.into(), 10.0, 170.0)?;
-        c.in_range("camera.vfov_deg", self.vfov_deg.into(), 10.0, 170.0)?;
-        c.in_range("camera.min_range", self.min_range.into(), 0.0, 100.0)?;
-        c.require(
-            self.max_range > self.min_range && self.max_range <= 100.0,
-            "camera.max_range",
-            self.max_range,
-            "must be > camera.min_range and ≤ 100",
-        )?;
-        c.in_range("camera.mount.height", self.mount.height.into(), 0.05, 5.0)?;
-        c.in_range(
-            "camera.mount.forward_offset",
-            self.mount.forward_offset.into(),
-            -2.0,
-            2.0,
-        )?;
-        c.in_range(
-            "camera.mount.pitch_deg",
-            self.mount.pitch_deg.into(),
-            -89.0,
-            89.0,
-        )
+        let c = &c.at("camera");
+        settings::ranges!(c, self, {
+            width: count(16, shm_types::MAX_WIDTH),
+            height: count(16, shm_types::MAX_HEIGHT),
+            [hfov_deg, vfov_deg]: in_range(10.0, 170.0),
+            min_range: in_range(0.0, 100.0),
+            max_range: require(
+                self.max_range > self.min_range && self.max_range <= 100.0,
+                &format!("must be > {} and ≤ 100", settings::key!(c, min_range)),
+            ),
+            mount: section,
+        });
+        Ok(())
     }
 }
 
@@ -138,6 +117,18 @@ impl Default for CameraMount {
     /// The `[camera.mount]` section of the built-in `config/default.toml`.
     fn default() -> Self {
         settings::DEFAULTS.section("camera.mount")
+    }
+}
+
+impl CameraMount {
+    /// Range-check; `c` is at this table.
+    pub fn validate(&self, c: &settings::Checker) -> Result<(), settings::ConfigError> {
+        settings::ranges!(c, self, {
+            height: in_range(0.05, 5.0),
+            forward_offset: in_range(-2.0, 2.0),
+            pitch_deg: in_range(-89.0, 89.0),
+        });
+        Ok(())
     }
 }
 

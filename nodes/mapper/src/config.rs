@@ -431,459 +431,196 @@ impl SopmConfig {
 }
 
 impl MapperConfig {
-    /// Range-check.
+    /// Range-check the `[mapper]` section and its tables.
     pub fn validate(&self, c: &Checker) -> Result<(), ConfigError> {
-        c.count("mapper.pixel_stride", self.pixel_stride as usize, 1, 32)?;
-        c.count(
-            "mapper.max_points_per_detection",
-            self.max_points_per_detection as usize,
-            10,
-            1_000_000,
-        )?;
-        c.count("mapper.min_points", self.min_points as usize, 3, 100_000)?;
-        c.in_range("mapper.floor_margin", self.floor_margin.into(), 0.0, 1.0)?;
-        c.in_range(
-            "mapper.support_margin",
-            self.support_margin.into(),
-            0.0,
-            0.2,
-        )?;
-        c.in_range("mapper.gap_min", self.gap_min.into(), 0.001, 1.0)?;
-        c.in_range("mapper.gap_factor", self.gap_factor.into(), 0.0, 100.0)?;
-        c.in_range("mapper.object_voxel", self.object_voxel.into(), 0.002, 0.2)?;
-        c.in_range(
-            "mapper.background_voxel",
-            self.background_voxel.into(),
-            0.002,
-            0.5,
-        )?;
-        c.count(
-            "mapper.max_object_voxels",
-            self.max_object_voxels as usize,
-            16,
-            10_000_000,
-        )?;
-        c.in_range(
-            "mapper.extent_quantile",
-            self.extent_quantile.into(),
-            0.0,
-            0.2,
-        )?;
-        c.in_range(
-            "mapper.background_extent_quantile",
-            self.background_extent_quantile.into(),
-            0.0,
-            0.2,
-        )?;
-        c.in_range(
-            "mapper.yaw_keep_tolerance",
-            self.yaw_keep_tolerance.into(),
-            0.0,
-            1.0,
-        )?;
-        c.in_range(
-            "mapper.min_support_height",
-            self.min_support_height.into(),
-            0.0,
-            3.0,
-        )?;
-        c.count(
-            "mapper.min_observations",
-            self.min_observations as usize,
-            1,
-            1000,
-        )?;
-        c.in_range("mapper.merge_iou", self.merge_iou.into(), 0.0, 1.0)?;
-        c.in_range("mapper.merge_margin", self.merge_margin.into(), 0.0, 0.5)?;
-        c.in_range(
-            "mapper.merge_containment",
-            self.merge_containment.into(),
-            0.0,
-            1.0,
-        )?;
-        c.in_range("mapper.min_score", self.min_score.into(), 0.0, 1.0)?;
-        c.in_range(
-            "mapper.cross_merge_iou",
-            self.cross_merge_iou.into(),
-            0.01,
-            1.0,
-        )?;
-        c.count(
-            "mapper.distinct_after",
-            self.distinct_after as usize,
-            1,
-            1_000_000,
-        )?;
-        let ve = &self.view_extents;
-        c.count(
-            "mapper.view_extents.max_views",
-            ve.max_views as usize,
-            1,
-            4096,
-        )?;
-        c.count(
-            "mapper.view_extents.points_per_view",
-            ve.points_per_view as usize,
-            3,
-            100_000,
-        )?;
-        c.in_range(
-            "mapper.view_extents.perpendicular_cos",
-            ve.perpendicular_cos.into(),
-            0.0,
-            1.0,
-        )?;
-        c.count(
-            "mapper.view_extents.min_views",
-            ve.min_views as usize,
-            1,
-            4096,
-        )?;
-        c.in_range(
-            "mapper.view_extents.border_px",
-            ve.border_px.into(),
-            0.0,
-            1000.0,
-        )?;
-        c.in_range(
-            "mapper.view_extents.point_quantile",
-            ve.point_quantile.into(),
-            0.0,
-            0.2,
-        )?;
-        c.in_range(
-            "mapper.view_extents.view_quantile",
-            ve.view_quantile.into(),
-            0.0,
-            1.0,
-        )?;
-        let fl = &self.flat;
-        c.in_range("mapper.flat.max_height", fl.max_height.into(), 0.0, 0.2)?;
-        c.in_range(
-            "mapper.flat.stand_tolerance",
-            fl.stand_tolerance.into(),
-            0.001,
-            1.0,
-        )?;
-        c.in_range("mapper.flat.min_on_plane", fl.min_on_plane.into(), 0.0, 1.0)?;
-        c.count(
-            "mapper.flat.max_samples",
-            fl.max_samples as usize,
-            16,
-            100_000,
-        )?;
-        let sp = &self.sparse;
-        c.count(
-            "mapper.sparse.min_points",
-            sp.min_points as usize,
-            3,
-            100_000,
-        )?;
-        c.in_range("mapper.sparse.min_score", sp.min_score.into(), 0.0, 1.0)?;
-        c.in_range(
-            "mapper.sparse.max_above_support",
-            sp.max_above_support.into(),
-            0.0,
-            1.0,
-        )?;
-        c.in_range(
-            "mapper.sparse.min_prior_fit",
-            sp.min_prior_fit.into(),
-            0.0,
-            1.0,
-        )?;
-        c.in_range(
-            "mapper.existence.cross_class_iou",
-            self.existence.cross_class_iou.into(),
-            0.01,
-            1.0,
-        )?;
-        let e = &self.existence;
+        let c = &c.at("mapper");
+        settings::ranges!(c, self, {
+            pixel_stride: count(1, 32),
+            max_points_per_detection: count(10, 1_000_000),
+            min_points: count(3, 100_000),
+            floor_margin: in_range(0.0, 1.0),
+            support_margin: in_range(0.0, 0.2),
+            gap_min: in_range(0.001, 1.0),
+            gap_factor: in_range(0.0, 100.0),
+            object_voxel: in_range(0.002, 0.2),
+            background_voxel: in_range(0.002, 0.5),
+            max_object_voxels: count(16, 10_000_000),
+            [extent_quantile, background_extent_quantile]: in_range(0.0, 0.2),
+            yaw_keep_tolerance: in_range(0.0, 1.0),
+            min_support_height: in_range(0.0, 3.0),
+            min_observations: count(1, 1000),
+            merge_iou: in_range(0.0, 1.0),
+            merge_margin: in_range(0.0, 0.5),
+            [merge_containment, min_score]: in_range(0.0, 1.0),
+            cross_merge_iou: in_range(0.01, 1.0),
+            distinct_after: count(1, 1_000_000),
+            [view_extents, flat, sparse, existence, segmentation, association, sopm]: section,
+            [registration, grid]: section,
+        });
+        Ok(())
+    }
+}
+
+impl SparseConfig {
+    /// Range-check; `c` is at this table.
+    pub fn validate(&self, c: &Checker) -> Result<(), ConfigError> {
+        settings::ranges!(c, self, {
+            min_points: count(3, 100_000),
+            [min_score, max_above_support, min_prior_fit]: in_range(0.0, 1.0),
+        });
+        Ok(())
+    }
+}
+
+impl FlatConfig {
+    /// Range-check; `c` is at this table.
+    pub fn validate(&self, c: &Checker) -> Result<(), ConfigError> {
+        settings::ranges!(c, self, {
+            max_height: in_range(0.0, 0.2),
+            stand_tolerance: in_range(0.001, 1.0),
+            min_on_plane: in_range(0.0, 1.0),
+            max_samples: count(16, 100_000),
+        });
+        Ok(())
+    }
+}
+
+impl ExistenceConfig {
+    /// Range-check; `c` is at this table.
+    pub fn validate(&self, c: &Checker) -> Result<(), ConfigError> {
+        settings::ranges!(c, self, {
+            cross_class_iou: in_range(0.01, 1.0),
+            p_detect: require(
+                self.p_detect > self.p_false && self.p_detect < 1.0,
+                "must be in (p_false, 1)",
+            ),
+            p_false: require(self.p_false > 0.0 && self.p_false < 1.0, "must be in (0, 1)"),
+            max_log_odds: in_range(0.1, 50.0),
+            delete_below: require(
+                self.delete_below < 0.0 && self.delete_below > -self.max_log_odds,
+                "must be in (-max_log_odds, 0)",
+            ),
+            min_box_px: in_range(0.0, 1e6),
+            min_in_frame: in_range(0.0, 1.0),
+            max_range: in_range(0.1, 50.0),
+            [min_visible, occlusion_tolerance, overlap_iou]: in_range(0.0, 1.0),
+            [min_view_change_per_m, overlap_min]: in_range(0.0, 1.0),
+        });
+        let (areas, recall) = (&self.recall_area_px, &self.recall);
         c.require(
-            e.p_detect > e.p_false && e.p_detect < 1.0,
-            "mapper.existence.p_detect",
-            e.p_detect,
-            "must be in (p_false, 1)",
-        )?;
-        c.require(
-            e.p_false > 0.0 && e.p_false < 1.0,
-            "mapper.existence.p_false",
-            e.p_false,
-            "must be in (0, 1)",
-        )?;
-        c.in_range(
-            "mapper.existence.max_log_odds",
-            e.max_log_odds.into(),
-            0.1,
-            50.0,
-        )?;
-        c.require(
-            e.delete_below < 0.0 && e.delete_below > -e.max_log_odds,
-            "mapper.existence.delete_below",
-            e.delete_below,
-            "must be in (-max_log_odds, 0)",
-        )?;
-        c.in_range("mapper.existence.min_box_px", e.min_box_px.into(), 0.0, 1e6)?;
-        c.in_range(
-            "mapper.existence.min_in_frame",
-            e.min_in_frame.into(),
-            0.0,
-            1.0,
-        )?;
-        c.in_range("mapper.existence.max_range", e.max_range.into(), 0.1, 50.0)?;
-        c.in_range(
-            "mapper.existence.min_visible",
-            e.min_visible.into(),
-            0.0,
-            1.0,
-        )?;
-        c.in_range(
-            "mapper.existence.occlusion_tolerance",
-            e.occlusion_tolerance.into(),
-            0.0,
-            1.0,
-        )?;
-        c.in_range(
-            "mapper.existence.overlap_iou",
-            e.overlap_iou.into(),
-            0.0,
-            1.0,
-        )?;
-        c.in_range(
-            "mapper.existence.min_view_change_per_m",
-            e.min_view_change_per_m.into(),
-            0.0,
-            1.0,
-        )?;
-        c.in_range(
-            "mapper.existence.overlap_min",
-            e.overlap_min.into(),
-            0.0,
-            1.0,
-        )?;
-        c.require(
-            e.recall_area_px.len() == e.recall.len()
-                && !e.recall.is_empty()
-                && e.recall_area_px.windows(2).all(|w| w[1] > w[0])
-                && e.recall_area_px.first().is_some_and(|a| *a > 0.0),
-            "mapper.existence.recall_area_px",
-            format!("{:?}", e.recall_area_px),
+            areas.len() == recall.len()
+                && !recall.is_empty()
+                && areas.windows(2).all(|w| w[1] > w[0])
+                && areas.first().is_some_and(|a| *a > 0.0),
+            &settings::key!(c, recall_area_px),
+            format!("{areas:?}"),
             "must be ascending areas > 0, one per `recall` value",
         )?;
         c.require(
-            e.recall.iter().all(|r| (0.0..1.0).contains(r)),
-            "mapper.existence.recall",
-            format!("{:?}", e.recall),
+            recall.iter().all(|r| (0.0..1.0).contains(r)),
+            &settings::key!(c, recall),
+            format!("{recall:?}"),
             "must be probabilities in [0, 1)",
         )?;
+        settings::ranges!(c, self, {
+            confirmed_max_log_odds: require(
+                self.confirmed_max_log_odds >= self.max_log_odds
+                    && self.confirmed_max_log_odds <= 50.0,
+                "must be in [max_log_odds, 50]",
+            ),
+            confirmed_hits: count(1, 100_000),
+        });
+        Ok(())
+    }
+}
+
+impl SegmentationConfig {
+    /// Range-check; `c` is at this table.
+    pub fn validate(&self, c: &Checker) -> Result<(), ConfigError> {
+        settings::ranges!(c, self, {
+            plane_bin: in_range(0.002, 0.2),
+            [plane_min_fraction, above_min_fraction]: in_range(0.0, 1.0),
+        });
+        let [low, high] = self.table_heights;
         c.require(
-            e.confirmed_max_log_odds >= e.max_log_odds && e.confirmed_max_log_odds <= 50.0,
-            "mapper.existence.confirmed_max_log_odds",
-            e.confirmed_max_log_odds,
-            "must be in [max_log_odds, 50]",
-        )?;
-        c.count(
-            "mapper.existence.confirmed_hits",
-            e.confirmed_hits as usize,
-            1,
-            100_000,
-        )?;
-        let g = &self.segmentation;
-        c.in_range(
-            "mapper.segmentation.plane_bin",
-            g.plane_bin.into(),
-            0.002,
-            0.2,
-        )?;
-        c.in_range(
-            "mapper.segmentation.plane_min_fraction",
-            g.plane_min_fraction.into(),
-            0.0,
-            1.0,
-        )?;
-        c.in_range(
-            "mapper.segmentation.above_min_fraction",
-            g.above_min_fraction.into(),
-            0.0,
-            1.0,
-        )?;
-        c.require(
-            g.table_heights[0] >= 0.0 && g.table_heights[1] > g.table_heights[0],
-            "mapper.segmentation.table_heights",
-            format!("{:?}", g.table_heights),
+            low >= 0.0 && high > low,
+            &settings::key!(c, table_heights),
+            format!("{:?}", self.table_heights),
             "must be [low, high] with 0 <= low < high",
         )?;
-        c.in_range(
-            "mapper.segmentation.outlier_factor",
-            g.outlier_factor.into(),
-            0.5,
-            100.0,
-        )?;
-        c.in_range(
-            "mapper.segmentation.split_factor",
-            g.split_factor.into(),
-            1.0,
-            100.0,
-        )?;
-        c.in_range(
-            "mapper.segmentation.split_gap",
-            g.split_gap.into(),
-            0.005,
-            1.0,
-        )?;
-        let a = &self.association;
-        for (k, group) in a.lookalike.iter().enumerate() {
+        settings::ranges!(c, self, {
+            outlier_factor: in_range(0.5, 100.0),
+            split_factor: in_range(1.0, 100.0),
+            split_gap: in_range(0.005, 1.0),
+        });
+        Ok(())
+    }
+}
+
+impl AssociationConfig {
+    /// Range-check; `c` is at this table.
+    pub fn validate(&self, c: &Checker) -> Result<(), ConfigError> {
+        for (k, group) in self.lookalike.iter().enumerate() {
             for name in group {
                 c.require(
                     shm_types::class_id(name).is_some(),
-                    &format!("mapper.association.lookalike[{k}]"),
+                    &format!("{}[{k}]", settings::key!(c, lookalike)),
                     name,
                     "must be COCO class names",
                 )?;
             }
         }
-        c.in_range("mapper.association.alpha", a.alpha, 0.0, 1.0)?;
-        c.in_range(
-            "mapper.association.c_asso_rate",
-            a.c_asso_rate.into(),
-            1e-4,
-            1.0,
-        )?;
-        c.count(
-            "mapper.association.max_test_points",
-            a.max_test_points as usize,
-            5,
-            100_000,
-        )?;
-        c.count(
-            "mapper.association.min_reference",
-            a.min_reference as usize,
-            1,
-            100_000,
-        )?;
-        c.in_range(
-            "mapper.association.gate_margin",
-            a.gate_margin.into(),
-            0.0,
-            2.0,
-        )?;
-        c.in_range(
-            "mapper.association.visibility_tolerance",
-            a.visibility_tolerance.into(),
-            0.0,
-            1.0,
-        )?;
-        c.in_range(
-            "mapper.association.front_tolerance",
-            a.front_tolerance.into(),
-            0.0,
-            100.0,
-        )?;
-        c.in_range(
-            "mapper.association.bbox_margin_px",
-            a.bbox_margin_px.into(),
-            0.0,
-            100.0,
-        )?;
-        let s = &self.sopm;
-        c.count("mapper.sopm.rows", s.rows as usize, 1, MAX_SOPM_CELLS)?;
-        c.count("mapper.sopm.cols", s.cols as usize, 3, MAX_SOPM_CELLS)?;
-        c.require(
-            (s.rows * s.cols) as usize <= MAX_SOPM_CELLS,
-            "mapper.sopm.rows",
-            s.rows,
-            &format!("rows × cols must be ≤ {MAX_SOPM_CELLS}"),
-        )?;
-        c.count("mapper.sopm.eps_n", s.eps_n as usize, 1, 100_000)?;
-        c.require(
-            s.p_occ > 0.5 && s.p_occ < 1.0,
-            "mapper.sopm.p_occ",
-            s.p_occ,
-            "must be in (0.5, 1)",
-        )?;
-        c.require(
-            s.p_free > 0.0 && s.p_free < 0.5,
-            "mapper.sopm.p_free",
-            s.p_free,
-            "must be in (0, 0.5)",
-        )?;
-        c.require(
-            s.p_prior > 0.0 && s.p_prior < 1.0,
-            "mapper.sopm.p_prior",
-            s.p_prior,
-            "must be in (0, 1)",
-        )?;
-        c.in_range("mapper.sopm.eps_sopm", s.eps_sopm.into(), 0.0, 1.0)?;
-        c.in_range("mapper.sopm.visible_cos", s.visible_cos.into(), -1.0, 1.0)?;
-        let r = &self.registration;
-        c.count(
-            "mapper.registration.iterations",
-            r.iterations as usize,
-            1,
-            50,
-        )?;
-        c.in_range(
-            "mapper.registration.max_distance",
-            r.max_distance.into(),
-            0.002,
-            0.5,
-        )?;
-        c.in_range("mapper.registration.trim", r.trim.into(), 0.1, 1.0)?;
-        c.in_range(
-            "mapper.registration.min_overlap",
-            r.min_overlap.into(),
-            0.0,
-            1.0,
-        )?;
-        c.count(
-            "mapper.registration.min_correspondences",
-            r.min_correspondences as usize,
-            3,
-            1_000_000,
-        )?;
-        c.count(
-            "mapper.registration.min_object_observations",
-            r.min_object_observations as usize,
-            1,
-            1000,
-        )?;
-        c.count(
-            "mapper.registration.max_points_per_detection",
-            r.max_points_per_detection as usize,
-            10,
-            1_000_000,
-        )?;
-        c.in_range(
-            "mapper.registration.max_translation",
-            r.max_translation.into(),
-            0.0,
-            1.0,
-        )?;
-        c.in_range(
-            "mapper.registration.max_yaw_deg",
-            r.max_yaw_deg.into(),
-            0.0,
-            20.0,
-        )?;
-        c.in_range(
-            "mapper.registration.yaw_min_spread",
-            r.yaw_min_spread.into(),
-            0.0,
-            10.0,
-        )?;
-        c.in_range(
-            "mapper.registration.persist_gain",
-            r.persist_gain.into(),
-            0.0,
-            1.0,
-        )?;
-        c.in_range(
-            "mapper.registration.persist_decay",
-            r.persist_decay.into(),
-            0.0,
-            1.0,
-        )?;
-        self.grid.validate(c)
+        settings::ranges!(c, self, {
+            alpha: in_range(0.0, 1.0),
+            c_asso_rate: in_range(1e-4, 1.0),
+            max_test_points: count(5, 100_000),
+            min_reference: count(1, 100_000),
+            gate_margin: in_range(0.0, 2.0),
+            visibility_tolerance: in_range(0.0, 1.0),
+            [front_tolerance, bbox_margin_px]: in_range(0.0, 100.0),
+        });
+        Ok(())
+    }
+}
+
+impl SopmConfig {
+    /// Range-check; `c` is at this table.
+    pub fn validate(&self, c: &Checker) -> Result<(), ConfigError> {
+        settings::ranges!(c, self, {
+            rows: count(1, MAX_SOPM_CELLS),
+            cols: count(3, MAX_SOPM_CELLS),
+            rows: require(
+                (self.rows * self.cols) as usize <= MAX_SOPM_CELLS,
+                &format!("rows × cols must be ≤ {MAX_SOPM_CELLS}"),
+            ),
+            eps_n: count(1, 100_000),
+            p_occ: require(self.p_occ > 0.5 && self.p_occ < 1.0, "must be in (0.5, 1)"),
+            p_free: require(self.p_free > 0.0 && self.p_free < 0.5, "must be in (0, 0.5)"),
+            p_prior: require(self.p_prior > 0.0 && self.p_prior < 1.0, "must be in (0, 1)"),
+            eps_sopm: in_range(0.0, 1.0),
+            visible_cos: in_range(-1.0, 1.0),
+        });
+        Ok(())
+    }
+}
+
+impl RegistrationConfig {
+    /// Range-check; `c` is at this table.
+    pub fn validate(&self, c: &Checker) -> Result<(), ConfigError> {
+        settings::ranges!(c, self, {
+            iterations: count(1, 50),
+            max_distance: in_range(0.002, 0.5),
+            trim: in_range(0.1, 1.0),
+            min_overlap: in_range(0.0, 1.0),
+            min_correspondences: count(3, 1_000_000),
+            min_object_observations: count(1, 1000),
+            max_points_per_detection: count(10, 1_000_000),
+            max_translation: in_range(0.0, 1.0),
+            max_yaw_deg: in_range(0.0, 20.0),
+            yaw_min_spread: in_range(0.0, 10.0),
+            [persist_gain, persist_decay]: in_range(0.0, 1.0),
+        });
+        Ok(())
     }
 }
 
@@ -919,32 +656,27 @@ impl Default for GridConfig {
 }
 
 impl GridConfig {
-    /// Range-check.
+    /// Range-check; `c` is at this table.
     pub fn validate(&self, c: &Checker) -> Result<(), ConfigError> {
-        c.in_range("mapper.grid.origin[0]", self.origin[0].into(), -1e4, 1e4)?;
-        c.in_range("mapper.grid.origin[1]", self.origin[1].into(), -1e4, 1e4)?;
-        c.in_range("mapper.grid.resolution", self.resolution.into(), 0.01, 1.0)?;
-        c.count("mapper.grid.width", self.width as usize, 1, MAX_GRID_CELLS)?;
-        c.count(
-            "mapper.grid.height",
-            self.height as usize,
-            1,
-            MAX_GRID_CELLS,
-        )?;
-        c.require(
-            self.width as usize * self.height as usize <= MAX_GRID_CELLS,
-            "mapper.grid.height",
-            self.height,
-            &format!("width × height must be ≤ {MAX_GRID_CELLS}"),
-        )?;
-        c.in_range("mapper.grid.min_z", self.min_z.into(), 0.0, 5.0)?;
-        c.require(
-            self.max_z > self.min_z && self.max_z <= 10.0,
-            "mapper.grid.max_z",
-            self.max_z,
-            "must be > mapper.grid.min_z and ≤ 10",
-        )?;
-        c.count("mapper.grid.stride", self.stride as usize, 1, 64)?;
-        c.in_range("mapper.grid.max_range", self.max_range.into(), 0.1, 50.0)
+        for (i, &v) in self.origin.iter().enumerate() {
+            let key = format!("{}[{i}]", settings::key!(c, origin));
+            c.in_range(&key, v.into(), -1e4, 1e4)?;
+        }
+        settings::ranges!(c, self, {
+            resolution: in_range(0.01, 1.0),
+            [width, height]: count(1, MAX_GRID_CELLS),
+            height: require(
+                self.width as usize * self.height as usize <= MAX_GRID_CELLS,
+                &format!("width × height must be ≤ {MAX_GRID_CELLS}"),
+            ),
+            min_z: in_range(0.0, 5.0),
+            max_z: require(
+                self.max_z > self.min_z && self.max_z <= 10.0,
+                &format!("must be > {} and ≤ 10", settings::key!(c, min_z)),
+            ),
+            stride: count(1, 64),
+            max_range: in_range(0.1, 50.0),
+        });
+        Ok(())
     }
 }

@@ -50,6 +50,22 @@ impl Default for ViewExtentConfig {
     }
 }
 
+impl ViewExtentConfig {
+    /// Range-check; `c` is at this table.
+    pub fn validate(&self, c: &settings::Checker) -> Result<(), settings::ConfigError> {
+        settings::ranges!(c, self, {
+            max_views: count(1, 4096),
+            points_per_view: count(3, 100_000),
+            perpendicular_cos: in_range(0.0, 1.0),
+            min_views: count(1, 4096),
+            border_px: in_range(0.0, 1000.0),
+            point_quantile: in_range(0.0, 0.2),
+            view_quantile: in_range(0.0, 1.0),
+        });
+        Ok(())
+    }
+}
+
 /// One recorded view.
 #[derive(Debug, Clone, PartialEq)]
 struct View {

@@ -170,6 +170,22 @@ impl Default for GbvConfig {
     }
 }
 
+impl GbvConfig {
+    /// Range-check; `c` is at this table.
+    pub fn validate(&self, c: &Checker) -> Result<(), ConfigError> {
+        settings::ranges!(c, self, {
+            candidates: count(1, 100_000),
+            [alpha, beta]: in_range(0.0, 100.0),
+            safe_distance: in_range(0.0, 10.0),
+            max_rounds_per_cluster: count(1, 10_000),
+            [revisit_radius, distance_weight]: in_range(0.0, 10.0),
+            reopen_rounds: count(0, 1000),
+            max_reopens: count(0, 100),
+        });
+        Ok(())
+    }
+}
+
 /// `[planner.lbv]`: local best view (neck).
 #[derive(Debug, Clone, Copy, PartialEq, Deserialize)]
 #[serde(deny_unknown_fields)]
@@ -190,6 +206,22 @@ impl Default for LbvConfig {
     /// The `[planner.lbv]` section of the built-in `config/default.toml`.
     fn default() -> Self {
         settings::DEFAULTS.section("planner.lbv")
+    }
+}
+
+impl LbvConfig {
+    /// Range-check; `c` is at this table.
+    pub fn validate(&self, c: &Checker) -> Result<(), ConfigError> {
+        settings::ranges!(c, self, {
+            candidates: count(1, 100_000),
+            [alpha, beta]: in_range(0.0, 100.0),
+            neck_min_deg: in_range(-180.0, 180.0),
+            neck_max_deg: require(
+                self.neck_max_deg >= self.neck_min_deg && self.neck_max_deg <= 180.0,
+                &format!("must be in [{}, 180]", settings::key!(c, neck_min_deg)),
+            ),
+        });
+        Ok(())
     }
 }
 
@@ -224,6 +256,22 @@ impl Default for BootstrapConfig {
     }
 }
 
+impl BootstrapConfig {
+    /// Range-check; `c` is at this table.
+    pub fn validate(&self, c: &Checker) -> Result<(), ConfigError> {
+        settings::ranges!(c, self, {
+            look_around_steps: count(1, 360),
+            neck_tolerance_deg: in_range(0.1, 90.0),
+            sectors: count(1, 64),
+            empty_cluster_sectors: count(0, self.sectors),
+            approach_m: require(self.approach_m > 0.0, "must be > 0 (inf: the rule off)"),
+            explore_neck_amplitude_deg: in_range(0.0, 180.0),
+            explore_neck_period_s: in_range(0.1, 1000.0),
+        });
+        Ok(())
+    }
+}
+
 /// `[planner.coverage]`: all-views coverage baseline.
 #[derive(Debug, Clone, Copy, PartialEq, Deserialize)]
 #[serde(deny_unknown_fields)]
@@ -236,6 +284,16 @@ impl Default for CoverageConfig {
     /// The `[planner.coverage]` section of the built-in `config/default.toml`.
     fn default() -> Self {
         settings::DEFAULTS.section("planner.coverage")
+    }
+}
+
+impl CoverageConfig {
+    /// Range-check; `c` is at this table.
+    pub fn validate(&self, c: &Checker) -> Result<(), ConfigError> {
+        settings::ranges!(c, self, {
+            waypoints: count(3, 10_000),
+        });
+        Ok(())
     }
 }
 
@@ -268,6 +326,19 @@ impl Default for FrontierConfig {
     }
 }
 
+impl FrontierConfig {
+    /// Range-check; `c` is at this table.
+    pub fn validate(&self, c: &Checker) -> Result<(), ConfigError> {
+        settings::ranges!(c, self, {
+            min_cells: count(1, 100_000),
+            blacklist_radius: in_range(0.0, 10.0),
+            [gain_weight, min_unknown_area_m2]: in_range(0.0, 100.0),
+            seen_radius: in_range(0.0, 10.0),
+        });
+        Ok(())
+    }
+}
+
 /// `[planner.give_up]`: when VP-SOM gives up an object whose entropy stops falling (see
 /// [`crate::giveup`]).
 #[derive(Debug, Clone, Copy, PartialEq, Deserialize)]
@@ -284,6 +355,17 @@ impl Default for GiveUpConfig {
     /// The `[planner.give_up]` section of the built-in `config/default.toml`.
     fn default() -> Self {
         settings::DEFAULTS.section("planner.give_up")
+    }
+}
+
+impl GiveUpConfig {
+    /// Range-check; `c` is at this table.
+    pub fn validate(&self, c: &Checker) -> Result<(), ConfigError> {
+        settings::ranges!(c, self, {
+            rounds: count(1, 1000),
+            min_drop: in_range(0.0, 1.0),
+        });
+        Ok(())
     }
 }
 
@@ -354,175 +436,27 @@ impl Default for PlannerConfig {
 }
 
 impl PlannerConfig {
-    /// Range-check.
+    /// Range-check the `[planner]` section and its tables.
     pub fn validate(&self, c: &Checker) -> Result<(), ConfigError> {
-        c.in_range("planner.lbv_hz", self.lbv_hz, 0.1, 1000.0)?;
-        c.positive("planner.lbv_budget_ms", self.lbv_budget_ms)?;
-        c.require(
-            self.lbv_budget_ms <= 1000.0 / self.lbv_hz,
-            "planner.lbv_budget_ms",
-            self.lbv_budget_ms,
-            "must not exceed the LBV period 1000 / planner.lbv_hz",
-        )?;
-        c.in_range("planner.eps_sopm", self.eps_sopm.into(), 0.0, 1.0)?;
-        c.in_range("planner.eps_cp", self.eps_cp.into(), 1.0, 1e6)?;
-        c.in_range(
-            "planner.theta_thresh_deg",
-            self.theta_thresh_deg.into(),
-            0.1,
-            180.0,
-        )?;
-        c.in_range("planner.robot_radius", self.robot_radius.into(), 0.0, 2.0)?;
-        c.in_range("planner.fa_radius", self.fa_radius.into(), 0.01, 100.0)?;
-        c.in_range(
-            "planner.fa_wall_slack",
-            self.fa_wall_slack.into(),
-            0.0,
-            100.0,
-        )?;
-        c.in_range(
-            "planner.fa_min_visible",
-            self.fa_min_visible.into(),
-            0.0,
-            1.0,
-        )?;
-        let g = &self.gbv;
-        c.count("planner.gbv.candidates", g.candidates, 1, 100_000)?;
-        c.in_range("planner.gbv.alpha", g.alpha.into(), 0.0, 100.0)?;
-        c.in_range("planner.gbv.beta", g.beta.into(), 0.0, 100.0)?;
-        c.in_range(
-            "planner.gbv.safe_distance",
-            g.safe_distance.into(),
-            0.0,
-            10.0,
-        )?;
-        c.count(
-            "planner.gbv.max_rounds_per_cluster",
-            g.max_rounds_per_cluster as usize,
-            1,
-            10_000,
-        )?;
-        c.in_range(
-            "planner.gbv.revisit_radius",
-            g.revisit_radius.into(),
-            0.0,
-            10.0,
-        )?;
-        c.in_range(
-            "planner.gbv.distance_weight",
-            g.distance_weight.into(),
-            0.0,
-            10.0,
-        )?;
-        c.count(
-            "planner.gbv.reopen_rounds",
-            g.reopen_rounds as usize,
-            0,
-            1000,
-        )?;
-        c.count("planner.gbv.max_reopens", g.max_reopens as usize, 0, 100)?;
-        c.count(
-            "planner.min_observations",
-            self.min_observations as usize,
-            0,
-            1_000_000,
-        )?;
-        let l = &self.lbv;
-        c.count("planner.lbv.candidates", l.candidates, 1, 100_000)?;
-        c.in_range("planner.lbv.alpha", l.alpha.into(), 0.0, 100.0)?;
-        c.in_range("planner.lbv.beta", l.beta.into(), 0.0, 100.0)?;
-        c.in_range(
-            "planner.lbv.neck_min_deg",
-            l.neck_min_deg.into(),
-            -180.0,
-            180.0,
-        )?;
-        c.require(
-            l.neck_max_deg >= l.neck_min_deg && l.neck_max_deg <= 180.0,
-            "planner.lbv.neck_max_deg",
-            l.neck_max_deg,
-            "must be in [planner.lbv.neck_min_deg, 180]",
-        )?;
-        let b = &self.bootstrap;
-        c.count(
-            "planner.bootstrap.look_around_steps",
-            b.look_around_steps,
-            1,
-            360,
-        )?;
-        c.in_range(
-            "planner.bootstrap.neck_tolerance_deg",
-            b.neck_tolerance_deg.into(),
-            0.1,
-            90.0,
-        )?;
-        c.count("planner.bootstrap.sectors", b.sectors, 1, 64)?;
-        c.count(
-            "planner.bootstrap.empty_cluster_sectors",
-            b.empty_cluster_sectors,
-            0,
-            b.sectors,
-        )?;
-        c.require(
-            b.approach_m > 0.0,
-            "planner.bootstrap.approach_m",
-            b.approach_m,
-            "must be > 0 (inf: the rule off)",
-        )?;
-        c.in_range(
-            "planner.bootstrap.explore_neck_amplitude_deg",
-            b.explore_neck_amplitude_deg.into(),
-            0.0,
-            180.0,
-        )?;
-        c.in_range(
-            "planner.bootstrap.explore_neck_period_s",
-            b.explore_neck_period_s.into(),
-            0.1,
-            1000.0,
-        )?;
-        c.count(
-            "planner.coverage.waypoints",
-            self.coverage.waypoints,
-            3,
-            10_000,
-        )?;
-        c.count(
-            "planner.frontier.min_cells",
-            self.frontier.min_cells,
-            1,
-            100_000,
-        )?;
-        c.in_range(
-            "planner.frontier.blacklist_radius",
-            self.frontier.blacklist_radius.into(),
-            0.0,
-            10.0,
-        )?;
-        c.in_range(
-            "planner.frontier.gain_weight",
-            self.frontier.gain_weight.into(),
-            0.0,
-            100.0,
-        )?;
-        c.in_range(
-            "planner.frontier.min_unknown_area_m2",
-            self.frontier.min_unknown_area_m2.into(),
-            0.0,
-            100.0,
-        )?;
-        c.in_range(
-            "planner.frontier.seen_radius",
-            self.frontier.seen_radius.into(),
-            0.0,
-            10.0,
-        )?;
-        c.count("planner.give_up.rounds", self.give_up.rounds, 1, 1000)?;
-        c.in_range(
-            "planner.give_up.min_drop",
-            self.give_up.min_drop.into(),
-            0.0,
-            1.0,
-        )
+        let c = &c.at("planner");
+        settings::ranges!(c, self, {
+            lbv_hz: in_range(0.1, 1000.0),
+            lbv_budget_ms: positive,
+            lbv_budget_ms: require(
+                self.lbv_budget_ms <= 1000.0 / self.lbv_hz,
+                &format!("must not exceed the LBV period 1000 / {}", settings::key!(c, lbv_hz)),
+            ),
+            eps_sopm: in_range(0.0, 1.0),
+            eps_cp: in_range(1.0, 1e6),
+            theta_thresh_deg: in_range(0.1, 180.0),
+            robot_radius: in_range(0.0, 2.0),
+            fa_radius: in_range(0.01, 100.0),
+            fa_wall_slack: in_range(0.0, 100.0),
+            fa_min_visible: in_range(0.0, 1.0),
+            gbv: section,
+            min_observations: count(0, 1_000_000),
+            [lbv, bootstrap, coverage, frontier, give_up]: section,
+        });
+        Ok(())
     }
 }

@@ -83,86 +83,47 @@ impl Default for SimConfig {
 }
 
 impl SimConfig {
-    /// Range-check.
+    /// Range-check the `[sim]` section.
     pub fn validate(&self, c: &Checker) -> Result<(), ConfigError> {
-        c.require(
-            !self.scene.is_empty(),
-            "sim.scene",
-            "\"\"",
-            "must name a scene",
-        )?;
-        c.in_range("sim.noise_a", self.noise_a.into(), 0.0, 0.5)?;
-        c.in_range("sim.noise_b", self.noise_b.into(), 0.0, 0.5)?;
-        c.in_range("sim.grazing_deg", self.grazing_deg.into(), 1.0, 90.0)?;
-        c.in_range("sim.dropout", self.dropout.into(), 0.0, 1.0)?;
+        let c = &c.at("sim");
+        let (scene, empty) = (settings::key!(c, scene), "\"\"");
+        c.require(!self.scene.is_empty(), &scene, empty, "must name a scene")?;
+        settings::ranges!(c, self, {
+            [noise_a, noise_b]: in_range(0.0, 0.5),
+            grazing_deg: in_range(1.0, 90.0),
+            dropout: in_range(0.0, 1.0),
+        });
         self.validate_artefacts(c)?;
-        c.in_range(
-            "sim.feature_density_objects",
-            self.feature_density_objects.into(),
-            0.0,
-            10_000.0,
-        )?;
-        c.in_range(
-            "sim.feature_density_walls",
-            self.feature_density_walls.into(),
-            0.0,
-            10_000.0,
-        )?;
-        c.count(
-            "sim.min_tracked_features",
-            self.min_tracked_features as usize,
-            0,
-            100_000,
-        )?;
-        c.positive("sim.max_track_rate_deg_s", self.max_track_rate_deg_s.into())?;
-        c.in_range(
-            "sim.failure_min_duration_s",
-            self.failure_min_duration_s.into(),
-            0.0,
-            3600.0,
-        )?;
-        c.in_range(
-            "sim.failure_min_distance_m",
-            self.failure_min_distance_m.into(),
-            0.0,
-            1000.0,
-        )
+        settings::ranges!(c, self, {
+            [feature_density_objects, feature_density_walls]: in_range(0.0, 10_000.0),
+            min_tracked_features: count(0, 100_000),
+            max_track_rate_deg_s: positive,
+            failure_min_duration_s: in_range(0.0, 3600.0),
+            failure_min_distance_m: in_range(0.0, 1000.0),
+        });
+        Ok(())
     }
 }
 
 impl SimConfig {
     /// Range-check the depth-artefact keys (each probability in [0, 1]; the outcomes of one
-    /// pixel sum to at most 1).
+    /// pixel sum to at most 1); `c` is at `[sim]`.
     fn validate_artefacts(&self, c: &Checker) -> Result<(), ConfigError> {
-        c.in_range(
-            "sim.edge_min_jump_m",
-            self.edge_min_jump_m.into(),
-            0.001,
-            10.0,
-        )?;
-        c.count("sim.edge_width_px", self.edge_width_px as usize, 1, 8)?;
-        for (key, p) in [
-            ("sim.edge_mixed", self.edge_mixed),
-            ("sim.edge_invalid", self.edge_invalid),
-            ("sim.glass_invalid", self.glass_invalid),
-            ("sim.glass_through", self.glass_through),
-            ("sim.dark_invalid", self.dark_invalid),
-            ("sim.specular_invalid", self.specular_invalid),
-        ] {
-            c.in_range(key, p.into(), 0.0, 1.0)?;
-        }
-        c.require(
-            self.edge_mixed + self.edge_invalid <= 1.0,
-            "sim.edge_invalid",
-            self.edge_invalid,
-            "edge_mixed + edge_invalid must be at most 1",
-        )?;
-        c.require(
-            self.glass_invalid + self.glass_through <= 1.0,
-            "sim.glass_through",
-            self.glass_through,
-            "glass_invalid + glass_through must be at most 1",
-        )
+        settings::ranges!(c, self, {
+            edge_min_jump_m: in_range(0.001, 10.0),
+            edge_width_px: count(1, 8),
+            [edge_mixed, edge_invalid, glass_invalid, glass_through]: in_range(0.0, 1.0),
+            [dark_invalid, specular_invalid]: in_range(0.0, 1.0),
+            edge_invalid: require(
+                self.edge_mixed + self.edge_invalid <= 1.0,
+                "edge_mixed + edge_invalid must be at most 1",
+            ),
+            glass_through: require(
+                self.glass_invalid + self.glass_through <= 1.0,
+                "glass_invalid + glass_through must be at most 1",
+            ),
+        });
+        Ok(())
     }
 }
 
@@ -245,68 +206,33 @@ impl DetectorConfig {
         self.mode == "masks"
     }
 
-    /// Range-check.
+    /// Range-check the `[detector]` section.
     pub fn validate(&self, c: &Checker) -> Result<(), ConfigError> {
+        let c = &c.at("detector");
         c.require(
             self.mode == "boxes" || self.mode == "masks",
-            "detector.mode",
+            &settings::key!(c, mode),
             format!("{:?}", self.mode),
             "must be \"boxes\" or \"masks\"",
         )?;
         let px = shm_types::MAX_PIXELS;
-        c.count("detector.min_pixels", self.min_pixels as usize, 1, px)?;
-        c.count("detector.small_pixels", self.small_pixels as usize, 1, px)?;
-        for (key, v) in [
-            ("detector.miss_rate", self.miss_rate),
-            ("detector.miss_small", self.miss_small),
-            ("detector.miss_occluded", self.miss_occluded),
-            ("detector.miss_truncated", self.miss_truncated),
-            ("detector.score_mean", self.score_mean),
-            ("detector.score_std", self.score_std),
-            ("detector.score_occluded", self.score_occluded),
-            ("detector.score_truncated", self.score_truncated),
-            ("detector.score_small", self.score_small),
-            ("detector.score_min", self.score_min),
-            ("detector.box_jitter_frac", self.box_jitter_frac),
-            ("detector.nms_iou", self.nms_iou),
-            ("detector.merge_union", self.merge_union),
-            ("detector.confusion_rate", self.confusion_rate),
-            ("detector.fp_score_min", self.fp_score_min),
-        ] {
-            c.in_range(key, v.into(), 0.0, 1.0)?;
-        }
-        c.in_range(
-            "detector.box_jitter_px",
-            self.box_jitter_px.into(),
-            0.0,
-            100.0,
-        )?;
-        c.in_range(
-            "detector.truncated_jitter",
-            self.truncated_jitter.into(),
-            1.0,
-            10.0,
-        )?;
-        c.count("detector.mask_bleed_px", self.mask_bleed_px as usize, 0, 16)?;
-        c.in_range(
-            "detector.confusion_bin_deg",
-            self.confusion_bin_deg.into(),
-            1.0,
-            360.0,
-        )?;
-        c.in_range(
-            "detector.confusion_bin_m",
-            self.confusion_bin_m.into(),
-            0.01,
-            100.0,
-        )?;
-        c.in_range("detector.fp_per_frame", self.fp_per_frame.into(), 0.0, 10.0)?;
-        c.require(
-            self.fp_score_max >= self.fp_score_min && self.fp_score_max <= 1.0,
-            "detector.fp_score_max",
-            self.fp_score_max,
-            "must be ≥ detector.fp_score_min and ≤ 1",
-        )?;
+        settings::ranges!(c, self, {
+            [min_pixels, small_pixels]: count(1, px),
+            [miss_rate, miss_small, miss_occluded, miss_truncated]: in_range(0.0, 1.0),
+            [score_mean, score_std, score_occluded, score_truncated]: in_range(0.0, 1.0),
+            [score_small, score_min, box_jitter_frac, nms_iou]: in_range(0.0, 1.0),
+            [merge_union, confusion_rate, fp_score_min]: in_range(0.0, 1.0),
+            box_jitter_px: in_range(0.0, 100.0),
+            truncated_jitter: in_range(1.0, 10.0),
+            mask_bleed_px: count(0, 16),
+            confusion_bin_deg: in_range(1.0, 360.0),
+            confusion_bin_m: in_range(0.01, 100.0),
+            fp_per_frame: in_range(0.0, 10.0),
+            fp_score_max: require(
+                self.fp_score_max >= self.fp_score_min && self.fp_score_max <= 1.0,
+                &format!("must be ≥ {} and ≤ 1", settings::key!(c, fp_score_min)),
+            ),
+        });
         let coco = |key: String, name: &String| {
             c.require(
                 shm_types::class_id(name).is_some(),
@@ -315,23 +241,26 @@ impl DetectorConfig {
                 "must be a COCO class name",
             )
         };
+        let groups = settings::key!(c, confusion_groups);
         for (g, group) in self.confusion_groups.iter().enumerate() {
             for (k, name) in group.iter().enumerate() {
-                coco(format!("detector.confusion_groups[{g}][{k}]"), name)?;
+                coco(format!("{groups}[{g}][{k}]"), name)?;
             }
         }
+        let walls = settings::key!(c, fp_wall_classes);
         for (k, name) in self.fp_wall_classes.iter().enumerate() {
-            coco(format!("detector.fp_wall_classes[{k}]"), name)?;
+            coco(format!("{walls}[{k}]"), name)?;
         }
+        let on_objects = settings::key!(c, fp_on_objects);
         for (g, entry) in self.fp_on_objects.iter().enumerate() {
             c.require(
                 entry.len() >= 2,
-                &format!("detector.fp_on_objects[{g}]"),
+                &format!("{on_objects}[{g}]"),
                 format!("{entry:?}"),
                 "must be [object class, detected class, ...]",
             )?;
             for (k, name) in entry.iter().enumerate() {
-                coco(format!("detector.fp_on_objects[{g}][{k}]"), name)?;
+                coco(format!("{on_objects}[{g}][{k}]"), name)?;
             }
         }
         Ok(())
@@ -388,86 +317,30 @@ impl Default for RobotConfig {
 }
 
 impl RobotConfig {
-    /// Range-check.
+    /// Range-check the `[robot]` section and `[robot.slam]`.
     pub fn validate(&self, c: &Checker) -> Result<(), ConfigError> {
-        c.in_range("robot.radius", self.radius.into(), 0.01, 2.0)?;
-        c.in_range("robot.max_speed", self.max_speed.into(), 0.01, 10.0)?;
-        c.in_range(
-            "robot.max_turn_rate_deg_s",
-            self.max_turn_rate_deg_s.into(),
-            1.0,
-            1000.0,
-        )?;
-        c.in_range(
-            "robot.neck_rate_deg_s",
-            self.neck_rate_deg_s.into(),
-            1.0,
-            2000.0,
-        )?;
-        c.in_range(
-            "robot.pitch_min_deg",
-            self.pitch_min_deg.into(),
-            -89.0,
-            89.0,
-        )?;
-        c.require(
-            self.pitch_max_deg >= self.pitch_min_deg && self.pitch_max_deg <= 89.0,
-            "robot.pitch_max_deg",
-            self.pitch_max_deg,
-            "must be ≥ robot.pitch_min_deg and ≤ 89",
-        )?;
-        c.in_range(
-            "robot.goal_tolerance_m",
-            self.goal_tolerance_m.into(),
-            0.001,
-            1.0,
-        )?;
-        c.in_range(
-            "robot.yaw_tolerance_deg",
-            self.yaw_tolerance_deg.into(),
-            0.01,
-            45.0,
-        )?;
-        c.in_range(
-            "robot.grid_resolution",
-            self.grid_resolution.into(),
-            0.01,
-            1.0,
-        )?;
-        c.in_range(
-            "robot.odom_trans_noise",
-            self.odom_trans_noise.into(),
-            0.0,
-            1.0,
-        )?;
-        c.in_range("robot.odom_rot_noise", self.odom_rot_noise.into(), 0.0, 1.0)?;
-        c.in_range("robot.odom_rot_per_m", self.odom_rot_per_m.into(), 0.0, 1.0)?;
-        c.in_range(
-            "robot.lost_drift_factor",
-            self.lost_drift_factor.into(),
-            1.0,
-            100.0,
-        )?;
-        c.in_range(
-            "robot.neck_encoder_bias_deg",
-            self.neck_encoder_bias_deg.into(),
-            0.0,
-            10.0,
-        )?;
-        c.in_range(
-            "robot.neck_encoder_noise_deg",
-            self.neck_encoder_noise_deg.into(),
-            0.0,
-            10.0,
-        )?;
-        c.in_range(
-            "robot.pose_delay_ms",
-            self.pose_delay_ms.into(),
-            0.0,
-            super::slam::MAX_DELAY_MS,
-        )?;
-        c.in_range("robot.substep_s", self.substep_s.into(), 0.0001, 0.1)?;
-        self.slam.validate(c)
+        let c = &c.at("robot");
+        settings::ranges!(c, self, {
+            radius: in_range(0.01, 2.0),
+            max_speed: in_range(0.01, 10.0),
+            max_turn_rate_deg_s: in_range(1.0, 1000.0),
+            neck_rate_deg_s: in_range(1.0, 2000.0),
+            pitch_min_deg: in_range(-89.0, 89.0),
+            pitch_max_deg: require(
+                self.pitch_max_deg >= self.pitch_min_deg && self.pitch_max_deg <= 89.0,
+                &format!("must be ≥ {} and ≤ 89", settings::key!(c, pitch_min_deg)),
+            ),
+            goal_tolerance_m: in_range(0.001, 1.0),
+            yaw_tolerance_deg: in_range(0.01, 45.0),
+            grid_resolution: in_range(0.01, 1.0),
+            [odom_trans_noise, odom_rot_noise, odom_rot_per_m]: in_range(0.0, 1.0),
+            lost_drift_factor: in_range(1.0, 100.0),
+            [neck_encoder_bias_deg, neck_encoder_noise_deg]: in_range(0.0, 10.0),
+            pose_delay_ms: in_range(0.0, super::slam::MAX_DELAY_MS),
+            substep_s: in_range(0.0001, 0.1),
+            slam: section,
+        });
+        Ok(())
     }
 }
 
@@ -507,36 +380,21 @@ impl Default for SlamConfig {
 }
 
 impl SlamConfig {
-    /// Range-check.
+    /// Range-check; `c` is at this table.
     pub fn validate(&self, c: &Checker) -> Result<(), ConfigError> {
-        let keys: [(&str, f32, f64); 10] = [
-            ("keyframe_distance_m", self.keyframe_distance_m, 10.0),
-            ("keyframe_angle_deg", self.keyframe_angle_deg, 180.0),
-            ("residual_xy_m", self.residual_xy_m, 1.0),
-            ("residual_yaw_deg", self.residual_yaw_deg, 45.0),
-            ("map_drift_xy_m", self.map_drift_xy_m, 1.0),
-            ("map_drift_yaw_deg", self.map_drift_yaw_deg, 45.0),
-            ("turn_equiv_m_per_rad", self.turn_equiv_m_per_rad, 10.0),
-            ("reuse_radius_m", self.reuse_radius_m, 10.0),
-            ("reuse_angle_deg", self.reuse_angle_deg, 180.0),
-            ("loop_min_travel_m", self.loop_min_travel_m, 1000.0),
-        ];
-        for (key, value, hi) in keys {
-            c.in_range(&format!("robot.slam.{key}"), value.into(), 0.0, hi)?;
-        }
-        c.positive(
-            "robot.slam.keyframe_distance_m",
-            self.keyframe_distance_m.into(),
-        )?;
-        c.positive(
-            "robot.slam.keyframe_angle_deg",
-            self.keyframe_angle_deg.into(),
-        )?;
-        c.count(
-            "robot.slam.max_keyframes",
-            self.max_keyframes as usize,
-            1,
-            100_000,
-        )
+        settings::ranges!(c, self, {
+            keyframe_distance_m: in_range(0.0, 10.0),
+            keyframe_angle_deg: in_range(0.0, 180.0),
+            residual_xy_m: in_range(0.0, 1.0),
+            residual_yaw_deg: in_range(0.0, 45.0),
+            map_drift_xy_m: in_range(0.0, 1.0),
+            map_drift_yaw_deg: in_range(0.0, 45.0),
+            [turn_equiv_m_per_rad, reuse_radius_m]: in_range(0.0, 10.0),
+            reuse_angle_deg: in_range(0.0, 180.0),
+            loop_min_travel_m: in_range(0.0, 1000.0),
+            [keyframe_distance_m, keyframe_angle_deg]: positive,
+            max_keyframes: count(1, 100_000),
+        });
+        Ok(())
     }
 }

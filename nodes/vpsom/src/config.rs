@@ -5,7 +5,8 @@
 //! (`deny_unknown_fields`, no `#[serde(default)]`), so a file sets only the keys it changes and an
 //! unknown key is an error naming the file and the key. Each section's `Default` is its section
 //! of the built-in file ([`settings::Defaults::section`]); each has a
-//! `validate(&self, &Checker)` that range-checks it.
+//! `validate(&self, &Checker)` that range-checks it, its rules declared field by field with
+//! [`settings::ranges!`] (keys from the field names).
 
 pub use geom::CameraConfig;
 use serde::Deserialize;
@@ -73,9 +74,13 @@ impl Default for RatesConfig {
 
 impl RatesConfig {
     fn validate(&self, c: &Checker) -> Result<(), ConfigError> {
-        c.in_range("rates.camera_hz", self.camera_hz, 0.1, 120.0)?;
-        c.in_range("rates.state_hz", self.state_hz, 0.1, 1000.0)?;
-        c.in_range("rates.map_hz", self.map_hz, 0.1, 120.0)
+        let c = &c.at("rates");
+        settings::ranges!(c, self, {
+            camera_hz: in_range(0.1, 120.0),
+            state_hz: in_range(0.1, 1000.0),
+            map_hz: in_range(0.1, 120.0),
+        });
+        Ok(())
     }
 }
 
@@ -123,54 +128,38 @@ impl Default for RunConfig {
 
 impl RunConfig {
     fn validate(&self, c: &Checker) -> Result<(), ConfigError> {
-        c.in_range("run.time_scale", self.time_scale, 0.01, 100.0)?;
-        c.count(
-            "run.camera_width",
-            self.camera_width as usize,
-            0,
-            shm_types::MAX_WIDTH,
-        )?;
-        c.count(
-            "run.camera_height",
-            self.camera_height as usize,
-            0,
-            shm_types::MAX_HEIGHT,
-        )?;
-        c.in_range("run.max_sim_s", self.max_sim_s, 1.0, 86_400.0)?;
-        c.count("run.max_restarts", self.max_restarts as usize, 0, 100)?;
-        c.require(
-            (0..=98).contains(&self.mapper_priority),
-            "run.mapper_priority",
-            self.mapper_priority,
-            "must be in [0, 98] (0 = SCHED_OTHER)",
-        )?;
-        for (key, v) in [
-            ("run.lbv_cpu", self.lbv_cpu),
-            ("run.lbv_backup_cpu", self.lbv_backup_cpu),
-        ] {
-            c.require(
-                (-1..1024).contains(&v),
-                key,
-                v,
-                "must be a CPU index below 1024, or -1",
-            )?;
-        }
-        c.require(
-            self.lbv_backup_cpu < 0 || (self.lbv_cpu >= 0 && self.lbv_cpu != self.lbv_backup_cpu),
-            "run.lbv_backup_cpu",
-            self.lbv_backup_cpu,
-            "needs run.lbv_cpu set to another CPU",
-        )?;
-        c.in_range("run.health_hz", self.health_hz, 0.5, 100.0)?;
-        c.in_range("run.hang_timeout_s", self.hang_timeout_s, 0.5, 3600.0)?;
-        c.in_range("run.start_timeout_s", self.start_timeout_s, 1.0, 3600.0)?;
-        c.require(
-            self.hang_timeout_s * self.health_hz >= 2.0,
-            "run.hang_timeout_s",
-            self.hang_timeout_s,
-            "must span at least two heartbeats (run.health_hz)",
-        )?;
-        c.in_range("run.stop_grace_s", self.stop_grace_s, 0.1, 600.0)
+        let c = &c.at("run");
+        const CPU: &str = "must be a CPU index below 1024, or -1";
+        settings::ranges!(c, self, {
+            time_scale: in_range(0.01, 100.0),
+            camera_width: count(0, shm_types::MAX_WIDTH),
+            camera_height: count(0, shm_types::MAX_HEIGHT),
+            max_sim_s: in_range(1.0, 86_400.0),
+            max_restarts: count(0, 100),
+            mapper_priority: require(
+                (0..=98).contains(&self.mapper_priority),
+                "must be in [0, 98] (0 = SCHED_OTHER)",
+            ),
+            lbv_cpu: require((-1..1024).contains(&self.lbv_cpu), CPU),
+            lbv_backup_cpu: require((-1..1024).contains(&self.lbv_backup_cpu), CPU),
+            lbv_backup_cpu: require(
+                self.lbv_backup_cpu < 0
+                    || (self.lbv_cpu >= 0 && self.lbv_cpu != self.lbv_backup_cpu),
+                &format!("needs {} set to another CPU", settings::key!(c, lbv_cpu)),
+            ),
+            health_hz: in_range(0.5, 100.0),
+            hang_timeout_s: in_range(0.5, 3600.0),
+            start_timeout_s: in_range(1.0, 3600.0),
+            hang_timeout_s: require(
+                self.hang_timeout_s * self.health_hz >= 2.0,
+                &format!(
+                    "must span at least two heartbeats ({})",
+                    settings::key!(c, health_hz)
+                ),
+            ),
+            stop_grace_s: in_range(0.1, 600.0),
+        });
+        Ok(())
     }
 }
 
@@ -213,20 +202,24 @@ impl Default for LinkConfig {
 
 impl LinkConfig {
     fn validate(&self, c: &Checker) -> Result<(), ConfigError> {
-        c.count("link.poll_ms", self.poll_ms as usize, 1, 10_000)?;
-        c.in_range("link.wait_for_peer_s", self.wait_for_peer_s, 0.0, 86_400.0)?;
-        c.count("link.quiet_ms", self.quiet_ms as usize, 1, 600_000)?;
-        c.in_range("link.drain_s", self.drain_s, 0.0, 600.0)?;
-        c.count("link.linger_ms", self.linger_ms as usize, 0, 600_000)?;
-        c.count("link.buffer", self.buffer, 1, 256)?;
+        let c = &c.at("link");
+        settings::ranges!(c, self, {
+            poll_ms: count(1, 10_000),
+            wait_for_peer_s: in_range(0.0, 86_400.0),
+            quiet_ms: count(1, 600_000),
+            drain_s: in_range(0.0, 600.0),
+            linger_ms: count(0, 600_000),
+            buffer: count(1, 256),
+        });
+        let max_hz = c.at(stringify!(max_hz));
         for (topic, &hz) in &self.max_hz {
             c.require(
                 LINK_LIMITABLE.contains(&topic.as_str()),
-                "link.max_hz",
+                &settings::key!(c, max_hz),
                 topic,
                 "only depth and map can be rate-limited",
             )?;
-            c.in_range(&format!("link.max_hz.{topic}"), hz, 0.0, 1000.0)?;
+            c.in_range(&max_hz.key(topic), hz, 0.0, 1000.0)?;
         }
         Ok(())
     }
@@ -259,22 +252,16 @@ impl Default for BenchConfig {
 
 impl BenchConfig {
     fn validate(&self, c: &Checker) -> Result<(), ConfigError> {
-        c.count(
-            "bench.camera_width",
-            self.camera_width as usize,
-            0,
-            shm_types::MAX_WIDTH,
-        )?;
-        c.count(
-            "bench.camera_height",
-            self.camera_height as usize,
-            0,
-            shm_types::MAX_HEIGHT,
-        )?;
-        c.in_range("bench.camera_hz", self.camera_hz, 0.0, 120.0)?;
-        c.in_range("bench.max_sim_s", self.max_sim_s, 1.0, 86_400.0)?;
-        c.count("bench.seeds", self.seeds as usize, 1, 1000)?;
-        c.count("bench.jobs", self.jobs, 0, 256)
+        let c = &c.at("bench");
+        settings::ranges!(c, self, {
+            camera_width: count(0, shm_types::MAX_WIDTH),
+            camera_height: count(0, shm_types::MAX_HEIGHT),
+            camera_hz: in_range(0.0, 120.0),
+            max_sim_s: in_range(1.0, 86_400.0),
+            seeds: count(1, 1000),
+            jobs: count(0, 256),
+        });
+        Ok(())
     }
 }
 
@@ -305,27 +292,16 @@ impl Default for SensingConfig {
 
 impl SensingConfig {
     fn validate(&self, c: &Checker) -> Result<(), ConfigError> {
-        c.count("sensing.frames", self.frames as usize, 1, 1_000_000)?;
-        c.in_range(
-            "sensing.ring_clearance",
-            self.ring_clearance.into(),
-            0.0,
-            10.0,
-        )?;
-        c.count("sensing.ring_points", self.ring_points, 1, 64)?;
-        c.in_range("sensing.goal_timeout_s", self.goal_timeout_s, 0.1, 3600.0)?;
-        c.in_range(
-            "sensing.neck_amplitude_deg",
-            self.neck_amplitude_deg.into(),
-            0.0,
-            180.0,
-        )?;
-        c.in_range(
-            "sensing.neck_period_s",
-            self.neck_period_s.into(),
-            0.1,
-            3600.0,
-        )
+        let c = &c.at("sensing");
+        settings::ranges!(c, self, {
+            frames: count(1, 1_000_000),
+            ring_clearance: in_range(0.0, 10.0),
+            ring_points: count(1, 64),
+            goal_timeout_s: in_range(0.1, 3600.0),
+            neck_amplitude_deg: in_range(0.0, 180.0),
+            neck_period_s: in_range(0.1, 3600.0),
+        });
+        Ok(())
     }
 }
 

@@ -6,6 +6,7 @@
 //! | file | content |
 //! |---|---|
 //! | `lib.rs` | [`ConfigError`], [`Checker`] (range checks), [`parse_toml`] / [`load_toml`] |
+//! | `ranges.rs` | [`ranges!`]: a section's range checks declared field by field, keys from the field names |
 //! | `defaults.rs` | [`Defaults`]: a built-in complete file ([`DEFAULTS`] = `config/default.toml`) that states every default once; user files merge over it |
 
 use serde::de::DeserializeOwned;
@@ -13,7 +14,9 @@ use std::fmt;
 use std::path::{Path, PathBuf};
 
 mod defaults;
+mod ranges;
 pub use defaults::{DEFAULT_PATH, DEFAULT_TOML, DEFAULTS, Defaults, merge_tables};
+pub use ranges::Count;
 
 /// Why a configuration file was refused.
 #[derive(Debug, thiserror::Error)]
@@ -60,21 +63,44 @@ impl ConfigError {
     }
 }
 
-/// Range checks for one file: collects the file name so each check reads as one line.
+/// Range checks for one file, at one table of it: collects the file name and the table's dotted
+/// key so each check reads as one line. [`ranges!`] builds each key from a field's name.
 #[derive(Debug, Clone)]
 pub struct Checker {
     file: PathBuf,
+    /// Dotted key of the table being checked (`""`: the file's root).
+    at: String,
 }
 
 impl Checker {
-    /// Checks values that came from `file`.
+    /// Checks values that came from `file`, at its root.
     pub fn new(file: impl Into<PathBuf>) -> Self {
-        Self { file: file.into() }
+        Self {
+            file: file.into(),
+            at: String::new(),
+        }
     }
 
     /// The file being checked.
     pub fn file(&self) -> &Path {
         &self.file
+    }
+
+    /// The same file, at the table `name` inside this one (`mapper` then `sopm`: `mapper.sopm`).
+    pub fn at(&self, name: &str) -> Checker {
+        Checker {
+            file: self.file.clone(),
+            at: self.key(name),
+        }
+    }
+
+    /// The dotted key of `name` in this table (`rows` at `mapper.sopm`: `mapper.sopm.rows`).
+    pub fn key(&self, name: &str) -> String {
+        if self.at.is_empty() {
+            name.to_string()
+        } else {
+            format!("{}.{name}", self.at)
+        }
     }
 
     /// `Err(Range)` naming `key` and `value` unless `ok`.
@@ -118,6 +144,22 @@ impl Checker {
             value >= lo && value <= hi,
             key,
             value,
+            &format!("must be in [{lo}, {hi}]"),
+        )
+    }
+
+    /// A value within `[lo, hi]` (integers: `must be in [1, 98]`).
+    pub fn within<T: PartialOrd + fmt::Display>(
+        &self,
+        key: &str,
+        value: T,
+        lo: T,
+        hi: T,
+    ) -> Result<(), ConfigError> {
+        self.require(
+            value >= lo && value <= hi,
+            key,
+            &value,
             &format!("must be in [{lo}, {hi}]"),
         )
     }

@@ -96,74 +96,53 @@ impl Default for ExecutorConfig {
 }
 
 impl ExecutorConfig {
-    /// Range-check.
+    /// Range-check the `[executor]` section and `[executor.pool]`.
     pub fn validate(&self, c: &Checker) -> Result<(), ConfigError> {
-        c.require(
-            (1..=98).contains(&self.priority),
-            "executor.priority",
-            self.priority,
-            "must be in [1, 98]",
-        )?;
-        c.require(
-            (-20..=19).contains(&self.nice),
-            "executor.nice",
-            self.nice,
-            "must be in [-20, 19]",
-        )?;
+        let c = &c.at("executor");
+        settings::ranges!(c, self, {
+            priority: within(1, 98),
+            nice: within(-20, 19),
+        });
         for &cpu in &self.cpus {
-            c.require(
-                cpu < 1024,
-                "executor.cpus",
-                cpu,
-                "must be a CPU index below 1024",
-            )?;
+            let key = settings::key!(c, cpus);
+            c.require(cpu < 1024, &key, cpu, "must be a CPU index below 1024")?;
         }
-        c.require(
-            self.spin_margin_us <= 100_000,
-            "executor.spin_margin_us",
-            self.spin_margin_us,
-            "must be in [0, 100000]",
-        )?;
-        c.require(
-            (-1..=10_000_000).contains(&self.cpu_dma_latency_us),
-            "executor.cpu_dma_latency_us",
-            self.cpu_dma_latency_us,
-            "must be in [-1, 10000000] (-1 = leave the system setting)",
-        )?;
-        c.require(
-            (-1..1024).contains(&self.backup_cpu),
-            "executor.backup_cpu",
-            self.backup_cpu,
-            "must be a CPU index below 1024, or -1 for none",
-        )?;
+        settings::ranges!(c, self, {
+            spin_margin_us: within(0, 100_000),
+            cpu_dma_latency_us: require(
+                (-1..=10_000_000).contains(&self.cpu_dma_latency_us),
+                "must be in [-1, 10000000] (-1 = leave the system setting)",
+            ),
+            backup_cpu: require(
+                (-1..1024).contains(&self.backup_cpu),
+                "must be a CPU index below 1024, or -1 for none",
+            ),
+        });
         if let Ok(cpu) = usize::try_from(self.backup_cpu) {
-            c.require(
-                !self.cpus.is_empty() && !self.cpus.contains(&cpu),
-                "executor.backup_cpu",
-                self.backup_cpu,
-                "needs executor.cpus set to the executor's own CPUs, without the backup CPU",
-            )?;
+            settings::ranges!(c, self, {
+                backup_cpu: require(
+                    !self.cpus.is_empty() && !self.cpus.contains(&cpu),
+                    &format!(
+                        "needs {} set to the executor's own CPUs, without the backup CPU",
+                        settings::key!(c, cpus)
+                    ),
+                ),
+            });
         }
-        c.require(
-            (10..=1_000_000).contains(&self.backup_delay_us),
-            "executor.backup_delay_us",
-            self.backup_delay_us,
-            "must be in [10, 1000000]",
-        )?;
-        c.require(
-            self.budget_fraction.is_finite()
-                && self.budget_fraction > 0.0
-                && self.budget_fraction <= 1.0,
-            "executor.budget_fraction",
-            self.budget_fraction,
-            "must be in (0, 1]",
-        )?;
-        c.require(
-            self.escalate_after <= 1_000_000,
-            "executor.escalate_after",
-            self.escalate_after,
-            "must be in [0, 1000000] (0 = never)",
-        )?;
-        self.pool.validate(c)
+        settings::ranges!(c, self, {
+            backup_delay_us: within(10, 1_000_000),
+            budget_fraction: require(
+                self.budget_fraction.is_finite()
+                    && self.budget_fraction > 0.0
+                    && self.budget_fraction <= 1.0,
+                "must be in (0, 1]",
+            ),
+            escalate_after: require(
+                self.escalate_after <= 1_000_000,
+                "must be in [0, 1000000] (0 = never)",
+            ),
+            pool: section,
+        });
+        Ok(())
     }
 }

@@ -107,48 +107,20 @@ impl Default for PortsConfig {
 }
 
 impl PortsConfig {
-    /// Range-check.
+    /// Range-check the `[ports]` section and its `[ports.topics.<topic>]` tables.
     pub fn validate(&self, c: &Checker) -> Result<(), ConfigError> {
+        let c = &c.at("ports");
         check_namespace(&self.namespace)
-            .map_err(|why| c.range("ports.namespace", &self.namespace, why))?;
-        check_domain(&self.domain).map_err(|why| c.range("ports.domain", &self.domain, why))?;
-        self.check_settings(c, "ports", &self.settings_with(&TopicOverride::default()))?;
+            .map_err(|why| c.range(&settings::key!(c, namespace), &self.namespace, why))?;
+        check_domain(&self.domain)
+            .map_err(|why| c.range(&settings::key!(c, domain), &self.domain, why))?;
+        check_settings(c, &self.settings_with(&TopicOverride::default()))?;
+        let topics = c.at(stringify!(topics));
         for (topic, o) in &self.topics {
-            check_topic(topic).map_err(|why| c.range("ports.topics", topic, why))?;
-            self.check_settings(c, &format!("ports.topics.{topic}"), &self.settings_with(o))?;
+            check_topic(topic).map_err(|why| c.range(&settings::key!(c, topics), topic, why))?;
+            check_settings(&topics.at(topic), &self.settings_with(o))?;
         }
         Ok(())
-    }
-
-    fn check_settings(&self, c: &Checker, at: &str, s: &TopicSettings) -> Result<(), ConfigError> {
-        c.count(&format!("{at}.history_size"), s.history_size, 0, 64)?;
-        c.count(
-            &format!("{at}.subscriber_buffer"),
-            s.subscriber_buffer,
-            1,
-            256,
-        )?;
-        c.count(
-            &format!("{at}.subscriber_max_borrowed"),
-            s.subscriber_max_borrowed,
-            1,
-            64,
-        )?;
-        c.count(
-            &format!("{at}.publisher_max_loaned"),
-            s.publisher_max_loaned,
-            1,
-            64,
-        )?;
-        c.count(&format!("{at}.max_publishers"), s.max_publishers, 1, 64)?;
-        c.count(&format!("{at}.max_subscribers"), s.max_subscribers, 1, 64)?;
-        c.count(&format!("{at}.max_nodes"), s.max_nodes, 2, 256)?;
-        c.require(
-            s.block_timeout_ms >= 1 && s.block_timeout_ms <= 600_000,
-            &format!("{at}.block_timeout_ms"),
-            s.block_timeout_ms,
-            "must be in [1, 600000]",
-        )
     }
 
     /// The settings for `topic`: the defaults merged with `[ports.topics.<topic>]` if present.
@@ -158,6 +130,19 @@ impl PortsConfig {
             None => self.settings_with(&TopicOverride::default()),
         }
     }
+}
+
+/// Range-check one topic's settings; `c` is at `[ports]` or at `[ports.topics.<topic>]`.
+fn check_settings(c: &Checker, s: &TopicSettings) -> Result<(), ConfigError> {
+    settings::ranges!(c, s, {
+        history_size: count(0, 64),
+        subscriber_buffer: count(1, 256),
+        [subscriber_max_borrowed, publisher_max_loaned]: count(1, 64),
+        [max_publishers, max_subscribers]: count(1, 64),
+        max_nodes: count(2, 256),
+        block_timeout_ms: within(1, 600_000),
+    });
+    Ok(())
 }
 
 /// `Ok` if `s` is usable as one segment of a service name.

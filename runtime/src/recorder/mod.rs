@@ -277,38 +277,25 @@ impl RecorderConfig {
         }
     }
 
-    /// Range-check.
+    /// Range-check the `[recorder]` section and `[recorder.view]`.
     pub fn validate(&self, c: &Checker) -> Result<(), ConfigError> {
-        c.count(
-            "recorder.compression_level",
-            self.compression_level as usize,
-            0,
-            19,
-        )?;
-        c.count(
-            "recorder.chunk_size_kb",
-            self.chunk_size_kb as usize,
-            16,
-            64 * 1024,
-        )?;
-        c.in_range(
-            "recorder.flush_interval_s",
-            self.flush_interval_s,
-            0.05,
-            10.0,
-        )?;
-        c.count("recorder.queue_len", self.queue_len, 16, 1 << 20)?;
-        c.count("recorder.depth_queue_len", self.depth_queue_len, 1, 64)?;
-        c.count("recorder.pool_len", self.pool_len, 1, 256)?;
-        c.count(
-            "recorder.view.depth_decimation",
-            self.view.depth_decimation as usize,
-            1,
-            16,
-        )?;
+        let c = &c.at("recorder");
+        settings::ranges!(c, self, {
+            compression_level: count(0, 19),
+            chunk_size_kb: count(16, 64 * 1024),
+            flush_interval_s: in_range(0.05, 10.0),
+            queue_len: count(16, 1 << 20),
+            depth_queue_len: count(1, 64),
+            pool_len: count(1, 256),
+        });
+        let view = c.at(stringify!(view));
+        settings::ranges!(view, self.view, {
+            depth_decimation: count(1, 16),
+        });
+        let max_hz = view.at(stringify!(max_hz));
         let topics: Vec<&str> = schemas::channels().iter().map(|d| d.topic).collect();
         for (t, &hz) in &self.view.max_hz {
-            let key = format!("recorder.view.max_hz.\"{t}\"");
+            let key = max_hz.key(&format!("\"{t}\""));
             c.require(
                 topics.contains(&t.as_str()),
                 &key,
@@ -317,25 +304,13 @@ impl RecorderConfig {
             )?;
             c.in_range(&key, hz, 0.0, 1000.0)?;
         }
-        c.in_range(
-            "recorder.stats_interval_s",
-            self.stats_interval_s,
-            0.05,
-            60.0,
-        )?;
-        c.in_range("recorder.trajectory_hz", self.trajectory_hz, 0.01, 100.0)?;
-        c.count(
-            "recorder.trajectory_max_poses",
-            self.trajectory_max_poses,
-            2,
-            1_000_000,
-        )?;
-        c.in_range(
-            "recorder.frustum_length_m",
-            self.frustum_length_m,
-            0.01,
-            10.0,
-        )
+        settings::ranges!(c, self, {
+            stats_interval_s: in_range(0.05, 60.0),
+            trajectory_hz: in_range(0.01, 100.0),
+            trajectory_max_poses: count(2, 1_000_000),
+            frustum_length_m: in_range(0.01, 10.0),
+        });
+        Ok(())
     }
 }
 

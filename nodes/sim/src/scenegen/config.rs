@@ -53,78 +53,42 @@ impl Default for SceneGenConfig {
 }
 
 impl SceneGenConfig {
-    /// Range-check.
+    /// Range-check the `[scenegen]` section.
     pub fn validate(&self, c: &Checker) -> Result<(), ConfigError> {
-        c.in_range("scenegen.room_min_m", self.room_min_m.into(), 3.0, 12.0)?;
-        c.require(
-            self.room_max_m >= self.room_min_m && self.room_max_m <= 12.0,
-            "scenegen.room_max_m",
-            self.room_max_m,
-            "must be ≥ scenegen.room_min_m and ≤ 12 (the navigation grid holds 256 × 256 cells)",
-        )?;
-        c.count("scenegen.clusters_min", self.clusters_min, 1, 8)?;
-        c.require(
-            self.clusters_max >= self.clusters_min && self.clusters_max <= 8,
-            "scenegen.clusters_max",
-            self.clusters_max,
-            "must be ≥ scenegen.clusters_min and ≤ 8",
-        )?;
-        c.count("scenegen.objects_min", self.objects_min, 1, 60)?;
-        c.require(
-            self.objects_max >= self.objects_min && self.objects_max <= 60,
-            "scenegen.objects_max",
-            self.objects_max,
-            "must be ≥ scenegen.objects_min and ≤ 60",
-        )?;
-        c.in_range(
-            "scenegen.partition_probability",
-            self.partition_probability.into(),
-            0.0,
-            1.0,
-        )?;
-        c.in_range(
-            "scenegen.partition_min_side_m",
-            self.partition_min_side_m.into(),
-            3.0,
-            12.0,
-        )?;
-        c.in_range("scenegen.passage_m", self.passage_m.into(), 0.6, 3.0)?;
-        c.in_range(
-            "scenegen.start_clearance_m",
-            self.start_clearance_m.into(),
-            0.0,
-            2.0,
-        )?;
-        c.in_range(
-            "scenegen.start_faces_cluster",
-            self.start_faces_cluster.into(),
-            0.0,
-            1.0,
-        )?;
-        c.count(
-            "scenegen.start_min_features",
-            self.start_min_features as usize,
-            0,
-            100_000,
-        )?;
-        c.in_range("scenegen.view_min_m", self.view_min_m.into(), 0.3, 5.0)?;
-        c.require(
-            self.view_max_m > self.view_min_m && self.view_max_m <= 8.0,
-            "scenegen.view_max_m",
-            self.view_max_m,
-            "must be > scenegen.view_min_m and ≤ 8",
-        )?;
-        c.count(
-            "scenegen.min_visible_points",
-            self.min_visible_points,
-            1,
-            10,
-        )?;
-        c.count(
-            "scenegen.max_attempts",
-            self.max_attempts as usize,
-            1,
-            10_000,
-        )
+        let c = &c.at("scenegen");
+        settings::ranges!(c, self, {
+            room_min_m: in_range(3.0, 12.0),
+            room_max_m: require(
+                self.room_max_m >= self.room_min_m && self.room_max_m <= 12.0,
+                &format!(
+                    "must be ≥ {} and ≤ 12 (the navigation grid holds 256 × 256 cells)",
+                    settings::key!(c, room_min_m)
+                ),
+            ),
+            clusters_min: count(1, 8),
+            clusters_max: require(
+                self.clusters_max >= self.clusters_min && self.clusters_max <= 8,
+                &format!("must be ≥ {} and ≤ 8", settings::key!(c, clusters_min)),
+            ),
+            objects_min: count(1, 60),
+            objects_max: require(
+                self.objects_max >= self.objects_min && self.objects_max <= 60,
+                &format!("must be ≥ {} and ≤ 60", settings::key!(c, objects_min)),
+            ),
+            partition_probability: in_range(0.0, 1.0),
+            partition_min_side_m: in_range(3.0, 12.0),
+            passage_m: in_range(0.6, 3.0),
+            start_clearance_m: in_range(0.0, 2.0),
+            start_faces_cluster: in_range(0.0, 1.0),
+            start_min_features: count(0, 100_000),
+            view_min_m: in_range(0.3, 5.0),
+            view_max_m: require(
+                self.view_max_m > self.view_min_m && self.view_max_m <= 8.0,
+                &format!("must be > {} and ≤ 8", settings::key!(c, view_min_m)),
+            ),
+            min_visible_points: count(1, 10),
+            max_attempts: count(1, 10_000),
+        });
+        Ok(())
     }
 }
