@@ -105,8 +105,10 @@ pub use validate::{Validate, ValidationError};
 /// The same struct with a `u8` field compiles and is `ZeroValid`:
 ///
 /// ```
+/// # #[cfg(feature = "ipc")]
+/// # use iceoryx2::prelude::ZeroCopySend;
 /// #[derive(Debug, bytemuck::Zeroable)]
-/// #[cfg_attr(feature = "ipc", derive(iceoryx2::prelude::ZeroCopySend))]
+/// #[cfg_attr(feature = "ipc", derive(ZeroCopySend))]
 /// #[repr(C)]
 /// struct Status { seq: u64, mode: u8 }
 ///
@@ -149,8 +151,10 @@ impl<T> IpcSend for T {}
 /// With a `u8` in its place it compiles and is `AnyBitPattern`:
 ///
 /// ```
+/// # #[cfg(feature = "ipc")]
+/// # use iceoryx2::prelude::ZeroCopySend;
 /// #[derive(Debug, Clone, Copy, bytemuck::AnyBitPattern)]
-/// #[cfg_attr(feature = "ipc", derive(iceoryx2::prelude::ZeroCopySend))]
+/// #[cfg_attr(feature = "ipc", derive(ZeroCopySend))]
 /// #[repr(C)]
 /// struct Frame { seq: u64, valid: u8 }
 ///
