@@ -174,6 +174,9 @@ pub struct DetectorConfig {
     /// Probability that an object seen from a viewing-direction/distance bin gets another class
     /// of its look-alike group (the same draw for the whole bin).
     pub confusion_rate: f32,
+    /// Probability that an object seen from a view bin gets the class of another, dissimilar
+    /// object of the scene (Hoiem et al.'s "other" confusion; drawn after `confusion_rate`).
+    pub other_rate: f32,
     /// Width of a viewing-direction bin for label confusion, degrees.
     pub confusion_bin_deg: f32,
     /// Width of a viewing-distance bin for label confusion, metres.
@@ -183,7 +186,13 @@ pub struct DetectorConfig {
     /// Mean number of false positives per frame (Poisson; a frame without a place for one has
     /// fewer).
     pub fp_per_frame: f32,
-    /// Lowest false-positive score.
+    /// Mislocalised duplicates per reported object: a second box of the same class on part of
+    /// the object (IoU with its true box in [0.1, 0.5)), scored like a true positive.
+    pub dup_per_tp: f32,
+    /// Confident background false positives per reported object: placed like the
+    /// `fp_per_frame` ones, scored like a true positive of a large, fully visible object.
+    pub fp_confident_per_tp: f32,
+    /// Lowest false-positive score (the `fp_per_frame` ones).
     pub fp_score_min: f32,
     /// Highest false-positive score.
     pub fp_score_max: f32,
@@ -221,7 +230,8 @@ impl DetectorConfig {
             [miss_rate, miss_small, miss_occluded, miss_truncated]: in_range(0.0, 1.0),
             [score_mean, score_std, score_occluded, score_truncated]: in_range(0.0, 1.0),
             [score_small, score_min, box_jitter_frac, nms_iou]: in_range(0.0, 1.0),
-            [merge_union, confusion_rate, fp_score_min]: in_range(0.0, 1.0),
+            [merge_union, confusion_rate, other_rate, fp_score_min]: in_range(0.0, 1.0),
+            [dup_per_tp, fp_confident_per_tp]: in_range(0.0, 1.0),
             box_jitter_px: in_range(0.0, 100.0),
             truncated_jitter: in_range(1.0, 10.0),
             mask_bleed_px: count(0, 16),

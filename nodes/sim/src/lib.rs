@@ -62,7 +62,7 @@ pub use slam::{PoseDelay, SlamEstimator, SlamEvent};
 pub use world::{Hit, STRUCTURE, World};
 
 use geom::{CameraMount, affine_to_pose};
-use glam::Affine3A;
+use glam::{Affine3A, Vec3};
 use shm_types::{
     DepthFrame, Detections, FrameVisibility, NavGoal, NeckGoal, OccupancyGrid, RobotState,
     boxed_zeroed,
@@ -244,7 +244,8 @@ impl Sim {
         let r = &self.robot;
         let true_pose = self.camera_pose(r.true_pose);
         let (est_base, est_neck) = r.stamped_pose();
-        let est_pose = self.mount.camera_pose(est_base, est_neck, r.neck_pitch);
+        let est_pose = tilted(est_base, r.slam().tilt())
+            * self.mount.camera_pose(est_base, est_neck, r.neck_pitch);
         self.frames += 1;
         frame.header.seq = self.frames;
         frame.header.stamp_ns = now_ns;
@@ -381,4 +382,21 @@ pub(crate) fn mix(seed: u64, words: &[u64]) -> u64 {
         z ^= z >> 31;
     }
     z
+}
+
+/// The SLAM's out-of-plane error `[z, roll, pitch]` of a base at `[x, y, yaw]`, as a world
+/// transform: roll about the base's forward axis and pitch about its left axis, both through
+/// the base's floor point, then a lift by `z`.
+fn tilted(base: [f32; 3], tilt: [f32; 3]) -> Affine3A {
+    let [x, y, yaw] = base;
+    let [z, roll, pitch] = tilt;
+    let at = Vec3::new(x, y, 0.0);
+    let heading = glam::Quat::from_rotation_z(yaw);
+    let r = heading
+        * glam::Quat::from_rotation_x(roll)
+        * glam::Quat::from_rotation_y(pitch)
+        * heading.inverse();
+    Affine3A::from_translation(at + Vec3::Z * z)
+        * Affine3A::from_quat(r)
+        * Affine3A::from_translation(-at)
 }

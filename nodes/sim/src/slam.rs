@@ -20,6 +20,13 @@
 //! decides what a real SLAM would recognise). [`PoseDelay`] keeps a short history of estimates
 //! and neck-encoder readings so that a frame is stamped with the pose from `pose_delay_ms`
 //! earlier. All randomness comes from the estimator's own PCG stream.
+//!
+//! **Out of the plane** (6 DoF): the base drives on a flat floor, so odometry says nothing
+//! about the camera's height, roll and pitch, but a visual SLAM estimates all six degrees of
+//! freedom from the same features. Its error there, `[z, roll, pitch]` ([`SlamEstimator::tilt`]),
+//! is the keyframe's map error plus a residual, with the in-plane sigmas (`residual_xy_m` for z,
+//! `residual_yaw_deg` for roll and pitch; `map_drift_*` likewise): ORB-SLAM2 RGB-D has no
+//! gravity prior, so its error is taken as isotropic. It changes only at keyframe corrections.
 
 use super::config::SlamConfig;
 use geom::wrap_angle;
@@ -51,6 +58,8 @@ struct Keyframe {
     y: f64,
     yaw: f64,
     map_error: Vector3<f64>,
+    /// The map's out-of-plane error there, `[z, roll, pitch]`.
+    map_tilt: Vector3<f64>,
     /// Base travel (m) when it was made.
     travel: f64,
 }
@@ -67,6 +76,10 @@ pub struct SlamEstimator {
     r: Matrix3<f64>,
     /// The map's error at the current place (added to keyframe measurements).
     map_error: Vector3<f64>,
+    /// The map's out-of-plane error `[z, roll, pitch]` at the current place.
+    map_tilt: Vector3<f64>,
+    /// The estimate's out-of-plane error `[z, roll, pitch]` (set at each correction).
+    tilt: Vector3<f64>,
     keyframes: Vec<Keyframe>,
     /// The keyframe the camera's motion is measured from.
     reference: Keyframe,
@@ -90,6 +103,7 @@ impl SlamEstimator {
             y: start[1].into(),
             yaw: start[2].into(),
             map_error: Vector3::zeros(),
+            map_tilt: Vector3::zeros(),
             travel: 0.0,
         };
         let mut keyframes = Vec::with_capacity(cfg.max_keyframes as usize);
@@ -100,6 +114,8 @@ impl SlamEstimator {
             p: Matrix3::zeros(),
             r: Matrix3::from_diagonal(&Vector3::new(sxy * sxy, sxy * sxy, syaw * syaw)),
             map_error: Vector3::zeros(),
+            map_tilt: Vector3::zeros(),
+            tilt: Vector3::zeros(),
             keyframes,
             reference: first,
             tracking: true,
@@ -111,6 +127,17 @@ impl SlamEstimator {
             loop_closures: 0,
             relocalizations: 0,
         }
+    }
+
+    /// The estimate's error out of the floor plane, `[z (m), roll (rad), pitch (rad)]` of the
+    /// base: what the SLAM believes of the camera's height and tilt, minus the truth (the
+    /// truth is 0, 0, 0: the floor is flat).
+    pub fn tilt(&self) -> [f32; 3] {
+        [
+            self.tilt[0] as f32,
+            self.tilt[1] as f32,
+            self.tilt[2] as f32,
+        ]
     }
 
     /// The estimated base pose `[x, y, yaw]`.
@@ -200,16 +227,19 @@ impl SlamEstimator {
             y: base[1].into(),
             yaw: camera_yaw.into(),
             map_error: self.map_error,
+            map_tilt: self.map_tilt,
             travel: travel.into(),
         };
         let event = if !was {
             // Relocalization in the map: the error of the place recognised, if any.
             if let Some(k) = self.nearest(&here) {
                 self.map_error = self.keyframes[k].map_error;
+                self.map_tilt = self.keyframes[k].map_tilt;
             }
             self.relocalizations += 1;
             self.reference = Keyframe {
                 map_error: self.map_error,
+                map_tilt: self.map_tilt,
                 ..here
             };
             SlamEvent::Relocalization
@@ -225,6 +255,7 @@ impl SlamEstimator {
                 Some(k) => {
                     let kf = self.keyframes[k];
                     self.map_error = kf.map_error;
+                    self.map_tilt = kf.map_tilt;
                     self.reference = kf;
                     if here.travel - kf.travel >= f64::from(self.cfg.loop_min_travel_m) {
                         self.loop_closures += 1;
@@ -243,8 +274,15 @@ impl SlamEstimator {
                         syaw * self.normal(),
                     );
                     self.map_error += step;
+                    let tilt_step = Vector3::new(
+                        sxy * self.normal(),
+                        syaw * self.normal(),
+                        syaw * self.normal(),
+                    );
+                    self.map_tilt += tilt_step;
                     let kf = Keyframe {
                         map_error: self.map_error,
+                        map_tilt: self.map_tilt,
                         ..here
                     };
                     if self.keyframes.len() < self.keyframes.capacity() {
@@ -265,6 +303,10 @@ impl SlamEstimator {
         let sd = self.r.diagonal().map(f64::sqrt);
         let truth = Vector3::new(base[0].into(), base[1].into(), base[2].into());
         let z = truth + self.map_error + sd.component_mul(&noise);
+        // Out of the plane: no odometry to fuse with, the estimate is the measurement.
+        let tilt_noise = Vector3::new(self.normal(), self.normal(), self.normal());
+        let tilt_sd = Vector3::new(sd[0], sd[2], sd[2]);
+        self.tilt = self.map_tilt + tilt_sd.component_mul(&tilt_noise);
         let mut innovation = z - self.x;
         innovation[2] = wrap(innovation[2]);
         let Some(s_inv) = (self.p + self.r).try_inverse() else {

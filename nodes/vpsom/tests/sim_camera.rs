@@ -24,7 +24,10 @@ fn perfect_detector() -> DetectorConfig {
         score_min: 0.0,
         nms_iou: 1.0,
         fp_per_frame: 0.0,
+        fp_confident_per_tp: 0.0,
+        dup_per_tp: 0.0,
         confusion_rate: 0.0,
+        other_rate: 0.0,
         mask_bleed_px: 0,
         min_pixels: 5,
         ..DetectorConfig::default()
@@ -164,6 +167,8 @@ fn partly_hidden_small_objects_are_missed_more_often() {
     let masks = DetectorConfig {
         mode: "masks".into(),
         fp_per_frame: 0.0,
+        fp_confident_per_tp: 0.0,
+        dup_per_tp: 0.0,
         miss_truncated: 0.0,
         ..DetectorConfig::default()
     };

@@ -54,7 +54,10 @@ fn perfect() -> DetectorConfig {
         mask_bleed_px: 0,
         nms_iou: 1.0,
         confusion_rate: 0.0,
+        other_rate: 0.0,
         fp_per_frame: 0.0,
+        fp_confident_per_tp: 0.0,
+        dup_per_tp: 0.0,
         ..DetectorConfig::default()
     }
 }
@@ -190,7 +193,10 @@ fn truncated_objects_are_missed_more_often_with_worse_boxes_and_lower_scores() {
     let cfg = DetectorConfig::default();
     let c = DetectorConfig {
         fp_per_frame: 0.0,
+        fp_confident_per_tp: 0.0,
+        dup_per_tp: 0.0,
         confusion_rate: 0.0,
+        other_rate: 0.0,
         ..cfg
     };
     let mut det = Detector::new(&scene(), &c, 9);
@@ -220,6 +226,8 @@ fn truncated_objects_are_missed_more_often_with_worse_boxes_and_lower_scores() {
 fn small_objects_are_missed_more_often_and_score_lower() {
     let c = DetectorConfig {
         fp_per_frame: 0.0,
+        fp_confident_per_tp: 0.0,
+        dup_per_tp: 0.0,
         ..DetectorConfig::default()
     };
     let mut det = Detector::new(&scene(), &c, 11);
@@ -329,6 +337,80 @@ fn false_positives_lie_on_background_with_low_scores_and_match_no_object() {
     assert!(
         on_table > 50 && on_wall > 50,
         "table {on_table}, wall {on_wall}"
+    );
+}
+
+#[test]
+fn duplicates_are_mislocalised_boxes_of_the_class_scored_like_the_object() {
+    let cfg = DetectorConfig {
+        dup_per_tp: 0.5,
+        ..perfect()
+    };
+    let mut det = Detector::new(&scene(), &cfg, 19);
+    let cup_box = [100, 100, 200, 200];
+    let img = image(&[(1, cup_box)]);
+    let cup = det.class_ids[0];
+    let frames = 400;
+    let (mut dups, mut dup_score, mut own_score) = (0, 0.0, 0.0);
+    for f in 0..frames {
+        let out = run(&mut det, &img, &pose_at(0.0), f);
+        assert!(out.count <= 2);
+        for d in out.detections() {
+            assert_eq!(d.class_id, cup);
+            if d.bbox == rect_u16(cup_box) {
+                own_score += d.score;
+                continue;
+            }
+            dups += 1;
+            dup_score += d.score;
+            let i = iou(d.bbox, rect_u16(cup_box));
+            assert!((0.1..0.5).contains(&i), "duplicate IoU {i}");
+        }
+    }
+    let rate = dups as f32 / frames as f32;
+    assert!((rate - 0.5).abs() < 0.08, "duplicates per detection {rate}");
+    let (dup_mean, own_mean) = (dup_score / dups as f32, own_score / frames as f32);
+    assert!(
+        (dup_mean - own_mean).abs() < 0.02,
+        "duplicate score {dup_mean} vs the object's {own_mean}"
+    );
+}
+
+#[test]
+fn confident_false_positives_score_like_true_positives_and_match_no_object() {
+    let cfg = DetectorConfig {
+        fp_confident_per_tp: 0.5,
+        ..perfect()
+    };
+    let mut det = Detector::new(&scene(), &cfg, 23);
+    let pose =
+        Affine3A::from_mat3_translation(optical_rotation(0.0, 0.5), Vec3::new(2.5, 0.0, 1.2));
+    let (table, cup) = ([150, 260, 500, 480], [300, 300, 330, 340]);
+    let img = image(&[(3, table), (1, cup)]);
+    let frames = 500;
+    let (mut fps, mut score) = (0, 0.0);
+    for f in 0..frames {
+        let out = run(&mut det, &img, &pose, f);
+        for d in out.detections() {
+            if d.bbox == rect_u16(table) || d.bbox == rect_u16(cup) {
+                continue;
+            }
+            fps += 1;
+            score += d.score;
+            assert!(iou(d.bbox, rect_u16(table)) < 0.5 && iou(d.bbox, rect_u16(cup)) < 0.5);
+        }
+    }
+    // Two objects reported per frame: one confident false positive per frame on average.
+    let rate = fps as f32 / frames as f32;
+    assert!(
+        rate > 0.8 && rate < 1.2,
+        "confident false positives per frame {rate}"
+    );
+    let mean = score / fps as f32;
+    assert!(
+        (mean - cfg.score_mean).abs() < 0.03,
+        "mean score {mean}, true positives' {}",
+        cfg.score_mean
     );
 }
 
