@@ -281,6 +281,8 @@ pub struct SensingConfig {
     pub neck_amplitude_deg: f32,
     /// Period of the neck's yaw sweep, s.
     pub neck_period_s: f32,
+    /// The bands the default sensing must land in on the paper scenes.
+    pub bands: crate::eval::sensing::Acceptance,
 }
 
 impl Default for SensingConfig {
@@ -301,6 +303,14 @@ impl SensingConfig {
             neck_amplitude_deg: in_range(0.0, 180.0),
             neck_period_s: in_range(0.1, 3600.0),
         });
+        if let Some(band) = self.bands.inverted() {
+            c.require(
+                false,
+                &format!("{}.{band}", settings::key!(c, bands)),
+                "max < min".to_string(),
+                "must have min ≤ max",
+            )?;
+        }
         Ok(())
     }
 }

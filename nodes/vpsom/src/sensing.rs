@@ -12,8 +12,8 @@
 
 use crate::config::Config;
 use crate::eval::sensing::{
-    ACCEPTANCE, ErrorStats, Figures, PoseSample, SceneReport, SensingReport, Settings, Tally, ate,
-    rpe, visible_objects,
+    ErrorStats, Figures, PoseSample, SceneReport, SensingReport, Settings, Tally, ate, rpe,
+    visible_objects,
 };
 use crate::geom::pose_to_affine;
 use crate::sim::{Scene, Sim, SimError};
@@ -189,7 +189,7 @@ pub fn run_sensing(
     }
     Ok(SensingReport {
         settings,
-        acceptance: ACCEPTANCE,
+        acceptance: spec.config.sensing.bands,
         scenes,
         overall: Figures::new("overall", &all, &all_ate, &all_rpe),
     })

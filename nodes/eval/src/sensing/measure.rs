@@ -10,6 +10,9 @@ use sim::{Scene, SceneObject, Shape};
 /// Minimum visible pixels of a visible object at 640×480 (scaled with the image area).
 pub const MIN_VISIBLE_PIXELS_640: f64 = 50.0;
 /// Box IoU at which a detection matches a visible object (COCO AP50).
+/// A false positive scoring at least this is counted as confident: above the mapper's default
+/// `min_score` (0.5), so it can reach the map.
+pub const CONFIDENT_SCORE: f32 = 0.5;
 pub const MATCH_IOU: f64 = 0.5;
 /// COCO's small/medium and medium/large area limits, pixels, at 640×480.
 pub const SIZE_LIMITS_640: [f64; 2] = [32.0 * 32.0, 96.0 * 96.0];
@@ -308,6 +311,8 @@ pub struct FrameStats {
     pub matched: u32,
     /// Unmatched detections.
     pub false_positives: u32,
+    /// Of which scoring at least [`CONFIDENT_SCORE`].
+    pub confident_false_positives: u32,
     /// Matched pairs with another class.
     pub confused: u32,
     /// Sum of the matched pairs' box IoU.
@@ -343,6 +348,8 @@ pub struct Tally {
     pub matched: u64,
     /// Unmatched detections.
     pub false_positives: u64,
+    /// Of which scoring at least [`CONFIDENT_SCORE`].
+    pub confident_false_positives: u64,
     /// Matched pairs with another class.
     pub confused: u64,
     /// Sum of matched IoU.
@@ -373,6 +380,15 @@ impl Tally {
             false_positives: (dets.len() - matches.len()) as u32,
             ..FrameStats::default()
         };
+        let mut used = vec![false; dets.len()];
+        for m in &matches {
+            used[m.detection] = true;
+        }
+        f.confident_false_positives = dets
+            .iter()
+            .zip(&used)
+            .filter(|(d, u)| !**u && d.score >= CONFIDENT_SCORE)
+            .count() as u32;
         for m in &matches {
             matched[m.visible] = true;
             f.iou_sum += m.iou;
@@ -397,6 +413,7 @@ impl Tally {
         self.detections += u64::from(f.detections);
         self.matched += u64::from(f.matched);
         self.false_positives += u64::from(f.false_positives);
+        self.confident_false_positives += u64::from(f.confident_false_positives);
         self.confused += u64::from(f.confused);
         self.iou_sum += f.iou_sum;
         let depth = [
@@ -425,6 +442,7 @@ impl Tally {
         self.detections += o.detections;
         self.matched += o.matched;
         self.false_positives += o.false_positives;
+        self.confident_false_positives += o.confident_false_positives;
         self.confused += o.confused;
         self.iou_sum += o.iou_sum;
         for (a, b) in self.depth.iter_mut().zip(o.depth) {

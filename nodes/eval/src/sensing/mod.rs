@@ -26,8 +26,8 @@
 //!   no alignment (both are in the world frame; the start is known); **RPE**: RMSE of the
 //!   translational error of the relative motion over Δ = 1 s (TUM convention), m.
 //!
-//! Acceptance ranges of the issue ([`ACCEPTANCE`]): recall 0.6–0.9, ≥ 0.2 false positives per
-//! frame, box IoU 0.70–0.85, confusion 5–15 %, ATE RMSE 1.5–5 cm.
+//! The bands each figure must land in ([`Acceptance`]) are the app's `[sensing.bands]`;
+//! a **confident** false positive scores at least [`CONFIDENT_SCORE`].
 
 mod measure;
 mod report;
