@@ -124,3 +124,54 @@ fn run_one(session: &SessionSpec, out: &Path) -> RunOutcome {
         wall_s: start.elapsed().as_secs_f64(),
     }
 }
+
+/// The table `--sensitivity` writes into the output directory.
+pub const SENSITIVITY_FILE: &str = "sensitivity.md";
+
+/// Mean P, R, IoU and CDE per label over the finished runs, and each `<planner>@<variant>`
+/// label's change from its `<planner>` (Markdown).
+pub fn sensitivity_table(outcomes: &[RunOutcome]) -> String {
+    use std::collections::BTreeMap;
+    let mut sums: BTreeMap<&str, [f64; 6]> = BTreeMap::new();
+    for m in outcomes.iter().filter_map(|o| o.result.as_ref().ok()) {
+        let s = sums.entry(m.planner.as_str()).or_default();
+        s[0] += m.precision;
+        s[1] += m.recall;
+        if let (Some(iou), Some(cde)) = (m.iou, m.cde_m) {
+            s[2] += iou;
+            s[3] += cde;
+            s[4] += 1.0;
+        }
+        s[5] += 1.0;
+    }
+    let mean = |s: &[f64; 6]| {
+        let (n, k) = (s[5].max(1.0), s[4].max(1.0));
+        [s[0] / n, s[1] / n, s[2] / k, s[3] / k]
+    };
+    let mut out = String::from(
+        "| planner | sensing | runs | P | R | IoU | CDE (m) | ΔP | ΔR | ΔIoU | ΔCDE (m) |\n\
+         |---|---|---|---|---|---|---|---|---|---|---|\n",
+    );
+    for (label, s) in &sums {
+        let (planner, variant) = label.split_once('@').unwrap_or((label, "default"));
+        let m = mean(s);
+        let d = match (variant, sums.get(planner)) {
+            ("default", _) | (_, None) => "| | | | |".to_string(),
+            (_, Some(b)) => {
+                let b = mean(b);
+                format!(
+                    "| {:+.3} | {:+.3} | {:+.3} | {:+.4} |",
+                    m[0] - b[0],
+                    m[1] - b[1],
+                    m[2] - b[2],
+                    m[3] - b[3]
+                )
+            }
+        };
+        out += &format!(
+            "| {planner} | {variant} | {} | {:.3} | {:.3} | {:.3} | {:.4} {d}\n",
+            s[5], m[0], m[1], m[2], m[3]
+        );
+    }
+    out
+}

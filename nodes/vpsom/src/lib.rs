@@ -29,6 +29,7 @@ pub mod replay;
 pub mod sensing;
 pub mod step;
 pub mod topics;
+pub mod variants;
 
 pub use eval;
 pub use geom;

@@ -50,6 +50,9 @@ pub enum SessionError {
     /// Unknown F(v) term in an ablation label.
     #[error(transparent)]
     Term(#[from] planner::UnknownTerm),
+    /// Unknown sensing variant in a label.
+    #[error(transparent)]
+    Variant(#[from] crate::variants::UnknownVariant),
 }
 
 /// What to run.
@@ -400,9 +403,17 @@ pub fn write_outputs(
 pub const EXPLORE_FILE: &str = "explore.png";
 
 /// The configuration of a planner label: `vpsom`, `coverage`, `frontier`, or `vpsom-no-<term>`
-/// (an ablation of one F(v) term).
+/// (an ablation of one F(v) term), each optionally followed by `@<variant>`: the sensing made
+/// worse in one group ([`crate::variants`]).
 pub fn config_for(base: &Config, label: &str) -> Result<Config, SessionError> {
     let mut cfg = base.clone();
+    let (label, variant) = match label.split_once('@') {
+        Some((l, v)) => (l, Some(v)),
+        None => (label, None),
+    };
+    if let Some(v) = variant {
+        crate::variants::apply(&mut cfg, v)?;
+    }
     let (kind, ablate) = match label.split_once("-no-") {
         Some((k, term)) => (k, Some(term)),
         None => (label, None),

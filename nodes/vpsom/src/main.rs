@@ -181,6 +181,15 @@ struct BenchCmd {
     /// With --generated: run only the generated rooms (not the paper scenes).
     #[arg(long, requires = "generated")]
     generated_only: bool,
+    /// A fixed scene set: `tune` (the paper scenes and generated rooms 1-20: develop, tune and
+    /// diagnose on these) or `test` (generated rooms 1001-1030, the kinds balanced: held out,
+    /// read as means once per change that is ready to land).
+    #[arg(long, value_parser = ["tune", "test"], conflicts_with_all = ["scenes", "generated"])]
+    split: Option<String>,
+    /// Sensing sensitivity: the planners (default: vpsom only) under the default sensing and
+    /// with each sensing group made twice as bad, one at a time; writes sensitivity.md.
+    #[arg(long, conflicts_with = "ablation")]
+    sensitivity: bool,
 }
 
 #[derive(Debug, Subcommand)]
@@ -451,7 +460,12 @@ fn print_metrics(m: &vpsom::eval::Metrics) {
 fn bench_cmd(config: Option<PathBuf>, cmd: BenchCmd) -> anyhow::Result<ExitCode> {
     let base = load_config(config.as_deref())?;
     let b = base.bench;
-    let names: Vec<String> = if cmd.generated_only {
+    let (seeds, paper): (Vec<u64>, bool) = match cmd.split.as_deref() {
+        Some("tune") => ((1..=20).collect(), true),
+        Some("test") => ((1001..=1030).collect(), false),
+        _ => ((1..=cmd.generated).collect(), !cmd.generated_only),
+    };
+    let names: Vec<String> = if !paper {
         cmd.scenes
     } else if cmd.scenes.is_empty() {
         BUILTIN_SCENES.iter().map(|(n, _)| n.to_string()).collect()
@@ -462,10 +476,10 @@ fn bench_cmd(config: Option<PathBuf>, cmd: BenchCmd) -> anyhow::Result<ExitCode>
         .iter()
         .map(|s| load_scene(s))
         .collect::<anyhow::Result<_>>()?;
-    if cmd.generated > 0 {
+    if !seeds.is_empty() {
         let dir = cmd.out.join("scenes");
         std::fs::create_dir_all(&dir).with_context(|| format!("creating {}", dir.display()))?;
-        for seed in 1..=cmd.generated {
+        for seed in seeds {
             let g = scenegen::generate(seed, None, &base)?;
             let file = dir.join(format!("{}.toml", g.scene.name));
             std::fs::write(&file, &g.toml)
@@ -473,11 +487,19 @@ fn bench_cmd(config: Option<PathBuf>, cmd: BenchCmd) -> anyhow::Result<ExitCode>
             scenes.push(g.scene);
         }
     }
-    let mut planners = if cmd.planners.is_empty() {
-        vec!["vpsom".into(), "coverage".into(), "frontier".into()]
-    } else {
+    let mut planners = if !cmd.planners.is_empty() {
         cmd.planners
+    } else if cmd.sensitivity {
+        vec!["vpsom".into()]
+    } else {
+        vec!["vpsom".into(), "coverage".into(), "frontier".into()]
     };
+    if cmd.sensitivity {
+        let base: Vec<String> = planners.clone();
+        for v in vpsom::variants::SENSITIVITY {
+            planners.extend(base.iter().map(|p| format!("{p}@{v}")));
+        }
+    }
     if cmd.ablation {
         planners.extend(
             vpsom::planner::AblationConfig::TERMS
@@ -512,6 +534,12 @@ fn bench_cmd(config: Option<PathBuf>, cmd: BenchCmd) -> anyhow::Result<ExitCode>
     );
     let start = std::time::Instant::now();
     let outcomes = bench::run_bench(&spec)?;
+    if cmd.sensitivity {
+        let file = spec.out.join(bench::SENSITIVITY_FILE);
+        std::fs::write(&file, bench::sensitivity_table(&outcomes))
+            .with_context(|| format!("writing {}", file.display()))?;
+        println!("sensitivity: {}", file.display());
+    }
     let failed: Vec<_> = outcomes.iter().filter(|o| o.result.is_err()).collect();
     for f in &failed {
         eprintln!(
