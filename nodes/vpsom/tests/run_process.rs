@@ -2,6 +2,7 @@
 //! terminates with every process exited, writes metrics.json and a readable MCAP, leaves no
 //! services behind, and maps as well as the lockstep host does on the same scene.
 
+use std::io::Write as _;
 use std::path::Path;
 use std::process::Command;
 
@@ -112,9 +113,18 @@ fn multi_process_run_terminates_and_matches_lockstep_quality() {
         assert_eq!(identical, maps, "{text}");
         assert!(check.status.success(), "{text}");
     } else {
-        // A recorder that lost messages under load: the maps after a lost input differ.
-        eprintln!(
-            "SKIPPED the exactness of the live check: the recorder dropped {dropped} messages\n{text}"
+        // A recorder that lost messages under load: the maps after a lost input differ, so
+        // their exactness cannot be checked. Said on the real stderr (not captured by the
+        // test harness), so the skip shows in every test log; VPSOM_RECORDER_EXACT=required
+        // turns it into a failure.
+        assert!(
+            std::env::var("VPSOM_RECORDER_EXACT").as_deref() != Ok("required"),
+            "VPSOM_RECORDER_EXACT=required, but the recorder dropped {dropped} messages\n{text}"
+        );
+        let _ = writeln!(
+            std::io::stderr(),
+            "SKIPPED run_process: the exactness of the live check (the recorder dropped \
+             {dropped} messages under load; {identical} of {maps} maps identical)"
         );
     }
 
