@@ -1100,18 +1100,22 @@ mod tests {
         crate::config::RUNTIME_DEFAULTS.parse(f, text)
     }
 
-    /// The channels a trace of the tests has: two of an app's, and the runtime's own.
-    fn topics() -> Vec<&'static str> {
-        let mut t = vec!["/camera/depth", "/tf"];
-        t.extend(schemas::own_channels().iter().map(|c| c.topic));
-        t
+    /// Validate `r` as for a trace whose channels are those the shipped `[recorder.view.max_hz]`
+    /// names (an app's) and the runtime's own.
+    fn validate(r: &RecorderConfig, c: &Checker) -> Result<(), ConfigError> {
+        let shipped = RecorderConfig::default().view.max_hz;
+        let mut topics: Vec<&str> = shipped.keys().map(String::as_str).collect();
+        topics.extend(schemas::own_channels().iter().map(|c| c.topic));
+        r.validate(c, &topics)
     }
 
     #[test]
     fn shipped_section_validates() {
-        RecorderConfig::default()
-            .validate(&Checker::new("config/runtime.toml"), &topics())
-            .unwrap();
+        validate(
+            &RecorderConfig::default(),
+            &Checker::new("config/runtime.toml"),
+        )
+        .unwrap();
     }
 
     #[test]
@@ -1119,22 +1123,22 @@ mod tests {
         let f = Path::new("bad.toml");
         let c = Checker::new("bad.toml");
         let r = parse(f, "[recorder.view]\ndepth_decimation = 0\n").unwrap();
-        let e = r.recorder.validate(&c, &topics()).unwrap_err();
+        let e = validate(&r.recorder, &c).unwrap_err();
         assert_eq!(
             e.to_string(),
             "bad.toml: recorder.view.depth_decimation = 0: must be in [1, 16]"
         );
         let r = parse(f, "[recorder.view.max_hz]\n\"/camera/dept\" = 2.0\n").unwrap();
-        let e = r.recorder.validate(&c, &topics()).unwrap_err();
+        let e = validate(&r.recorder, &c).unwrap_err();
         assert_eq!(e.key(), "recorder.view.max_hz.\"/camera/dept\"", "{e}");
         assert!(e.to_string().contains("no such topic"), "{e}");
         let r = parse(f, "[recorder.view.max_hz]\n\"/tf\" = -1.0\n").unwrap();
-        assert!(r.recorder.validate(&c, &topics()).is_err());
+        assert!(validate(&r.recorder, &c).is_err());
         let e = parse(f, "[recorder]\nprofile = \"fast\"\n").unwrap_err();
         assert_eq!(e.key(), "recorder.profile", "{e}");
         let r = parse(f, "[recorder]\nflush_interval_s = 0.0\n").unwrap();
         assert_eq!(
-            r.recorder.validate(&c, &topics()).unwrap_err().key(),
+            validate(&r.recorder, &c).unwrap_err().key(),
             "recorder.flush_interval_s"
         );
         let e = parse(f, "[recorder]\ncompression = \"gzip\"\n").unwrap_err();
