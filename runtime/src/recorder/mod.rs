@@ -29,12 +29,11 @@
 //! attached.
 //!
 //! # Profiles: `replay` and `view`
-//! `recorder.profile = "replay"` (the default) records every input the mapper and planner
-//! consume, losslessly: full-resolution depth (`/camera/depth` + `/camera/depth/meta`), the raw
-//! detections (`/detections`), every robot state (`/robot/state`), the navigation grid
-//! (`/nav/grid`), plus what they published. `"view"` is for long runs: every topic named in
-//! `[recorder.view.max_hz]` is written at most that often (simulated time; 0 = not at all) and
-//! depth is decimated by `recorder.view.depth_decimation`. What a rate limit leaves out is
+//! `recorder.profile = "replay"` (the default) writes every message the converter makes (an app
+//! converts every input of its logic losslessly, so a trace can be replayed). `"view"` is for
+//! long runs: every topic named in `[recorder.view.max_hz]` is written at most that often
+//! (simulated time; 0 = not at all), and the converter is to decimate depth by
+//! [`RecorderConfig::depth_decimation`]. What a rate limit leaves out is
 //! counted per topic as `throttled` (not a drop) in `/recorder/stats` and the final metadata.
 //!
 //! # Falling behind
@@ -237,11 +236,12 @@ pub struct RecorderConfig {
     pub pool_len: usize,
     /// Period of the `/recorder/stats` messages, seconds.
     pub stats_interval_s: f64,
-    /// Rate of the `/trajectory` messages (simulated time), Hz.
+    /// For the app's converter: rate of its trajectory messages (simulated time), Hz.
     pub trajectory_hz: f64,
-    /// Most poses kept in a trajectory message (older ones are thinned by 2 when exceeded).
+    /// For the app's converter: most poses kept in a trajectory message (older ones are thinned
+    /// by 2 when exceeded).
     pub trajectory_max_poses: usize,
-    /// Length of the drawn candidate-view frusta, metres.
+    /// For the app's converter: length of the drawn candidate-view frusta, metres.
     pub frustum_length_m: f64,
     /// Port of the live view when `vpsom run --live` names none.
     pub live_port: u16,
@@ -409,7 +409,8 @@ pub enum LogLevel {
     Fatal = 5,
 }
 
-/// Kinds of recorded input; each has one primary topic under which its drops are counted.
+/// Kinds of recorded input; each has one primary topic under which its offers and drops are
+/// counted (the runtime's own for the runtime's kinds, [`Converter::topic`] for the others).
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
 pub enum Kind {
     /// Depth frames.
@@ -755,7 +756,7 @@ impl RecorderHandle {
         }
     }
 
-    /// Record a depth frame (`/camera/depth`). Copies the used pixels into a preallocated buffer;
+    /// Record a depth frame ([`Converter::depth`]). Copies the used pixels into a preallocated buffer;
     /// if all are queued, the oldest queued frame is dropped (and counted) to make room
     /// ([`Overflow::Drop`]), or the call waits until the writer has taken one ([`Overflow::Wait`]).
     pub fn record_depth(&self, frame: &DepthFrame) {
@@ -793,8 +794,7 @@ impl RecorderHandle {
         let _ = self.wake.try_send(());
     }
 
-    /// Record detections (`/detections`, and `/camera/detections` drawn on the depth image of
-    /// the frame they belong to), copied into a pooled buffer.
+    /// Record detections ([`Converter::detections`]), copied into a pooled buffer.
     pub fn record_detections(&self, d: &Detections) {
         if let Some(mut b) = self.take(Kind::Detections, &self.shared.detections_pool) {
             convert::copy_detections(d, &mut b);
@@ -802,7 +802,7 @@ impl RecorderHandle {
         }
     }
 
-    /// Record the navigation grid (`/nav/grid`). Allocates a copy: grids are rare (the sim
+    /// Record the navigation grid ([`Converter::nav_grid`]). Allocates a copy: grids are rare (the sim
     /// publishes one a second); not for a real-time thread.
     pub fn record_nav_grid(&self, g: &OccupancyGrid) {
         let mut b = boxed_zeroed::<OccupancyGrid>();
@@ -816,17 +816,17 @@ impl RecorderHandle {
         self.push(Kind::NavGrid, Msg::NavGrid(b));
     }
 
-    /// Record the estimated robot state (`/robot/state`, `/tf`, `/trajectory`).
+    /// Record the estimated robot state ([`Converter::state`]).
     pub fn record_state(&self, state: &RobotState) {
         self.push(Kind::State, Msg::State(*state));
     }
 
-    /// Record the true robot state (`/truth/tf`, `/truth/trajectory`); simulation only.
+    /// Record the true robot state ([`Converter::true_state`]); simulation only.
     pub fn record_true_state(&self, state: &RobotState) {
         self.push(Kind::TrueState, Msg::TrueState(*state));
     }
 
-    /// Record an object map (`/map/objects`), copied into a pooled buffer.
+    /// Record an object map ([`Converter::map`]), copied into a pooled buffer.
     pub fn record_map(&self, map: &ObjectMap) {
         if let Some(mut b) = self.take(Kind::Map, &self.shared.map_pool) {
             b.copy_from(map);
@@ -834,8 +834,7 @@ impl RecorderHandle {
         }
     }
 
-    /// Record a planner decision (`/planner/decisions` and `/planner/gbv` or `/planner/lbv`),
-    /// copied into a pooled buffer.
+    /// Record a planner decision ([`Converter::decision`]), copied into a pooled buffer.
     pub fn record_decision(&self, d: &PlannerDecision) {
         if let Some(mut b) = self.take(Kind::Decision, &self.shared.decision_pool) {
             convert::copy_decision(d, &mut b);
@@ -843,12 +842,12 @@ impl RecorderHandle {
         }
     }
 
-    /// Record a navigation goal (`/planner/nav_goal`).
+    /// Record a navigation goal ([`Converter::nav_goal`]).
     pub fn record_nav_goal(&self, g: &NavGoal) {
         self.push(Kind::NavGoal, Msg::NavGoal(*g));
     }
 
-    /// Record a neck goal (`/planner/neck_goal`).
+    /// Record a neck goal ([`Converter::neck_goal`]).
     pub fn record_neck_goal(&self, g: &NeckGoal) {
         self.push(Kind::NeckGoal, Msg::NeckGoal(*g));
     }
