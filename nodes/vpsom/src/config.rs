@@ -365,7 +365,9 @@ impl Config {
     }
 
     /// `file` if given; else `config/default.toml` in the working directory if present; else the
-    /// built-in copy of it. Returns the config and where it came from.
+    /// built-in copy of it; each merged over [`DEFAULTS`] (so the runtime's sections come from the
+    /// built-in `config/runtime.toml` unless the file sets them). Returns the config and where it
+    /// came from.
     pub fn load_or_default(file: Option<&Path>) -> Result<(Self, PathBuf), ConfigError> {
         match file {
             Some(f) => Ok((Self::load(f)?, f.to_path_buf())),
