@@ -209,7 +209,7 @@ fn both_subprotocols_and_the_traces_pass_the_viewers_own_libraries() {
         assert_eq!(r["negotiated"], *sp);
         assert_eq!(
             r["channels"].as_u64(),
-            Some(runtime::recorder::schemas::channels().len() as u64),
+            Some(vpsom::recording::channels().len() as u64),
             "{t}"
         );
     }

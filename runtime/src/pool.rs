@@ -83,9 +83,9 @@ pub struct PoolConfig {
 }
 
 impl Default for PoolConfig {
-    /// The `[executor.pool]` section of the built-in `config/default.toml`.
+    /// The `[executor.pool]` section of the built-in `config/runtime.toml`.
     fn default() -> Self {
-        crate::config::DEFAULTS.section("executor.pool")
+        crate::config::RUNTIME_DEFAULTS.section("executor.pool")
     }
 }
 

@@ -1,13 +1,13 @@
 //! `[executor]`, `[executor.pool]` and `[ports]`: the shipped defaults load (they are the structs'
 //! defaults), a file merges over them; each bad value gives its specific error naming the key.
 
-use runtime::config::{Checker, ConfigError, DEFAULTS};
+use runtime::config::{Checker, ConfigError, RUNTIME_DEFAULTS};
 use runtime::executor::{ExecutorConfig, MissPolicy, SchedPolicy};
 use runtime::ports::{Overflow, PortsConfig};
 use serde::Deserialize;
 use std::path::Path;
 
-const SHIPPED: &str = include_str!("../../config/default.toml");
+const SHIPPED: &str = include_str!("../../config/runtime.toml");
 
 /// Only the sections owned by the runtime (other sections are ignored here).
 #[derive(Debug, Deserialize)]
@@ -18,7 +18,7 @@ struct Root {
 
 fn load(text: &str) -> Result<Root, ConfigError> {
     let file = Path::new("test.toml");
-    let root: Root = DEFAULTS.parse(file, text)?;
+    let root: Root = RUNTIME_DEFAULTS.parse(file, text)?;
     let c = Checker::new(file);
     root.executor.validate(&c)?;
     root.ports.validate(&c)?;

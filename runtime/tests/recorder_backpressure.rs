@@ -10,7 +10,6 @@ mod recorder_common;
 use crossbeam::channel::{Receiver, Sender, bounded};
 use recorder_common::*;
 use runtime::recorder::inspect::info;
-use runtime::recorder::schemas::topic;
 use runtime::recorder::{
     DropCounts, Overflow, Recorder, RecorderConfig, RecorderError, RecorderSetup, WriterHook,
 };
@@ -77,7 +76,7 @@ fn a_stalled_writer_never_blocks_a_live_publisher_and_every_drop_is_counted() {
     let setup = RecorderSetup {
         overflow: Overflow::Drop,
         writer_hook: Some(hook),
-        ..Default::default()
+        ..test_setup()
     };
     let rec = Recorder::create(&path, &cfg, setup).unwrap();
     let h = rec.handle();
@@ -147,7 +146,7 @@ fn a_waiting_recorder_drops_nothing_behind_a_slow_writer() {
             c.fetch_add(1, Ordering::SeqCst);
             std::thread::sleep(Duration::from_millis(1));
         })),
-        ..Default::default()
+        ..test_setup()
     };
     let rec = Recorder::create(&path, &small_room(), setup).unwrap();
     let h = rec.handle();
@@ -209,7 +208,7 @@ fn a_publisher_waiting_for_a_writer_that_dies_is_released_and_the_error_reported
                 panic!("test: the writer dies on its 5th message");
             }
         })),
-        ..Default::default()
+        ..test_setup()
     };
     let rec = Recorder::create(&path, &small_room(), setup).unwrap();
     let h = rec.handle();

@@ -9,8 +9,7 @@ mod recorder_common;
 use recorder_common::*;
 use runtime::recorder::inspect::info;
 use runtime::recorder::recover::recover;
-use runtime::recorder::schemas::topic;
-use runtime::recorder::{Recorder, RecorderConfig, RecorderSetup};
+use runtime::recorder::{Recorder, RecorderConfig};
 use std::collections::BTreeMap;
 use std::io::{BufRead, BufReader};
 use std::path::{Path, PathBuf};
@@ -25,7 +24,7 @@ fn child(path: &str) -> ! {
         flush_interval_s: FLUSH_S,
         ..Default::default()
     };
-    let rec = Recorder::create(path.as_ref(), &cfg, RecorderSetup::default()).unwrap();
+    let rec = Recorder::create(path.as_ref(), &cfg, test_setup()).unwrap();
     let h = rec.handle();
     let frame = depth(1, 160, 120);
     let mut f = shm_types::boxed_zeroed::<shm_types::DepthFrame>();

@@ -14,8 +14,7 @@ use recorder_common::*;
 use runtime::launcher::{ChildEvent, ChildSpec, ExitReason, Launcher};
 use runtime::recorder::inspect::{export_csv, info};
 use runtime::recorder::recover::{segment_path, segments};
-use runtime::recorder::schemas::topic;
-use runtime::recorder::{Recorder, RecorderConfig, RecorderSetup};
+use runtime::recorder::{Recorder, RecorderConfig};
 use std::io::Write;
 use std::path::{Path, PathBuf};
 use std::time::{Duration, Instant, SystemTime, UNIX_EPOCH};
@@ -38,7 +37,7 @@ fn child(dir: &Path) {
         flush_interval_s: FLUSH_S,
         ..Default::default()
     };
-    let rec = Recorder::resume(&first, &cfg, RecorderSetup::default()).unwrap();
+    let rec = Recorder::resume(&first, &cfg, test_setup()).unwrap();
     let seg = (0..100)
         .find(|&k| segment_path(&first, k) == rec.path())
         .expect("a segment of the run");
@@ -239,7 +238,7 @@ fn torn_trace(path: &Path, n: u64, keep: f64) {
         chunk_size_kb: 16,
         ..Default::default()
     };
-    let rec = Recorder::create(path, &cfg, RecorderSetup::default()).unwrap();
+    let rec = Recorder::create(path, &cfg, test_setup()).unwrap();
     let h = rec.handle();
     for i in 1..=n {
         h.record_state(&state(i));
@@ -271,8 +270,7 @@ fn resume_recovers_every_torn_segment_and_create_starts_a_new_run() {
         .collect();
     assert!(torn.iter().all(|&n| n > 0 && n < 2000), "{torn:?}");
 
-    let mut rec =
-        Recorder::resume(&first, &RecorderConfig::default(), RecorderSetup::default()).unwrap();
+    let mut rec = Recorder::resume(&first, &RecorderConfig::default(), test_setup()).unwrap();
     assert_eq!(rec.path(), segment_path(&first, 2));
     for i in 1..=10 {
         rec.handle().record_state(&state(i));
@@ -290,7 +288,7 @@ fn resume_recovers_every_torn_segment_and_create_starts_a_new_run() {
     assert_eq!(inf.count(topic::TF), torn[0] + torn[1] + 10);
 
     // A new run in the same directory starts from one segment again.
-    drop(Recorder::create(&first, &RecorderConfig::default(), RecorderSetup::default()).unwrap());
+    drop(Recorder::create(&first, &RecorderConfig::default(), test_setup()).unwrap());
     assert_eq!(segments(&dir), vec![first.clone()]);
     let _ = std::fs::remove_dir_all(&dir);
 }

@@ -4,9 +4,15 @@
 //! Frames (see `shm_types`): world z up; camera = OpenCV optical frame (x right, y down,
 //! z forward). Poses are `parent_from_child`. Scalars are `f32` (glam), like the messages.
 
-use glam::{Affine3A, Mat3, Quat, Vec2, Vec3};
+use glam::{Affine3A, DMat3, DVec3, Mat3, Quat, Vec2, Vec3};
 use serde::Deserialize;
 use shm_types::{Intrinsics, Pose3};
+
+/// The built-in `config/default.toml`, where this crate's sections (`[camera]`) have their defaults.
+pub(crate) static DEFAULTS: settings::Defaults = settings::Defaults::new(
+    "config/default.toml",
+    include_str!("../../../config/default.toml"),
+);
 
 /// The RGB-D camera (paper: Kinect v2 on the FABO robot's head).
 #[derive(Debug, Clone, Copy, PartialEq, Deserialize)]
@@ -31,7 +37,7 @@ pub struct CameraConfig {
 impl Default for CameraConfig {
     /// The `[camera]` section of the built-in `config/default.toml`.
     fn default() -> Self {
-        settings::DEFAULTS.section("camera")
+        crate::DEFAULTS.section("camera")
     }
 }
 
@@ -84,16 +90,32 @@ pub fn affine_to_pose(a: &Affine3A) -> Pose3 {
     }
 }
 
-/// Rotation `world_from_camera` of an optical camera whose forward axis has world yaw `yaw`
-/// and is pitched down by `pitch` (radians).
-pub fn optical_rotation(yaw: f32, pitch: f32) -> Mat3 {
-    let (sy, cy) = yaw.sin_cos();
-    let (sp, cp) = pitch.sin_cos();
-    let forward = Vec3::new(cy * cp, sy * cp, -sp);
-    let right = Vec3::new(sy, -cy, 0.0);
-    let down = forward.cross(right);
-    Mat3::from_cols(right, down, forward)
+/// The optical-camera convention, written once and instantiated in `f32` (the logic) and `f64`
+/// (the recorder's drawings, `vpsom::recording`): columns right, down, forward.
+macro_rules! optical_rotation_fn {
+    ($(#[$doc:meta])* $name:ident, $f:ty, $v:ty, $m:ty) => {
+        $(#[$doc])*
+        pub fn $name(yaw: $f, pitch: $f) -> $m {
+            let (sy, cy) = yaw.sin_cos();
+            let (sp, cp) = pitch.sin_cos();
+            let forward = <$v>::new(cy * cp, sy * cp, -sp);
+            let right = <$v>::new(sy, -cy, 0.0);
+            let down = forward.cross(right);
+            <$m>::from_cols(right, down, forward)
+        }
+    };
 }
+
+optical_rotation_fn!(
+    /// Rotation `world_from_camera` of an optical camera whose forward axis has world yaw `yaw`
+    /// and is pitched down by `pitch` (radians).
+    optical_rotation, f32, Vec3, Mat3
+);
+
+optical_rotation_fn!(
+    /// [`optical_rotation`] in `f64`: its columns are the camera's right, down and forward axes.
+    optical_rotation_f64, f64, DVec3, DMat3
+);
 
 /// World yaw and downward pitch of an optical camera's forward axis.
 pub fn yaw_pitch_of(world_from_camera: &Affine3A) -> (f32, f32) {
@@ -116,7 +138,7 @@ pub struct CameraMount {
 impl Default for CameraMount {
     /// The `[camera.mount]` section of the built-in `config/default.toml`.
     fn default() -> Self {
-        settings::DEFAULTS.section("camera.mount")
+        crate::DEFAULTS.section("camera.mount")
     }
 }
 

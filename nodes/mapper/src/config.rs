@@ -117,14 +117,14 @@ pub struct RegistrationConfig {
 impl Default for RegistrationConfig {
     /// The `[mapper.registration]` section of the built-in `config/default.toml`.
     fn default() -> Self {
-        settings::DEFAULTS.section("mapper.registration")
+        crate::DEFAULTS.section("mapper.registration")
     }
 }
 
 impl Default for MapperConfig {
     /// The `[mapper]` section of the built-in `config/default.toml`.
     fn default() -> Self {
-        settings::DEFAULTS.section("mapper")
+        crate::DEFAULTS.section("mapper")
     }
 }
 
@@ -233,7 +233,7 @@ pub struct ExtensionsConfig {
 impl Default for ExtensionsConfig {
     /// The `[mapper.extensions]` section of the built-in `config/default.toml`.
     fn default() -> Self {
-        settings::DEFAULTS.section("mapper.extensions")
+        crate::DEFAULTS.section("mapper.extensions")
     }
 }
 
@@ -326,21 +326,21 @@ pub struct FlatConfig {
 impl Default for FlatConfig {
     /// The `[mapper.flat]` section of the built-in `config/default.toml`.
     fn default() -> Self {
-        settings::DEFAULTS.section("mapper.flat")
+        crate::DEFAULTS.section("mapper.flat")
     }
 }
 
 impl Default for SparseConfig {
     /// The `[mapper.sparse]` section of the built-in `config/default.toml`.
     fn default() -> Self {
-        settings::DEFAULTS.section("mapper.sparse")
+        crate::DEFAULTS.section("mapper.sparse")
     }
 }
 
 impl Default for ExistenceConfig {
     /// The `[mapper.existence]` section of the built-in `config/default.toml`.
     fn default() -> Self {
-        settings::DEFAULTS.section("mapper.existence")
+        crate::DEFAULTS.section("mapper.existence")
     }
 }
 
@@ -372,14 +372,14 @@ pub struct SegmentationConfig {
 impl Default for SegmentationConfig {
     /// The `[mapper.segmentation]` section of the built-in `config/default.toml`.
     fn default() -> Self {
-        settings::DEFAULTS.section("mapper.segmentation")
+        crate::DEFAULTS.section("mapper.segmentation")
     }
 }
 
 impl Default for AssociationConfig {
     /// The `[mapper.association]` section of the built-in `config/default.toml`.
     fn default() -> Self {
-        settings::DEFAULTS.section("mapper.association")
+        crate::DEFAULTS.section("mapper.association")
     }
 }
 
@@ -410,7 +410,7 @@ pub struct SopmConfig {
 impl Default for SopmConfig {
     /// The `[mapper.sopm]` section of the built-in `config/default.toml`.
     fn default() -> Self {
-        settings::DEFAULTS.section("mapper.sopm")
+        crate::DEFAULTS.section("mapper.sopm")
     }
 }
 
@@ -651,7 +651,7 @@ pub struct GridConfig {
 impl Default for GridConfig {
     /// The `[mapper.grid]` section of the built-in `config/default.toml`.
     fn default() -> Self {
-        settings::DEFAULTS.section("mapper.grid")
+        crate::DEFAULTS.section("mapper.grid")
     }
 }
 

@@ -46,7 +46,7 @@ pub struct ViewExtentConfig {
 impl Default for ViewExtentConfig {
     /// The `[mapper.view_extents]` section of the built-in `config/default.toml`.
     fn default() -> Self {
-        settings::DEFAULTS.section("mapper.view_extents")
+        crate::DEFAULTS.section("mapper.view_extents")
     }
 }
 

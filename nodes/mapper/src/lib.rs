@@ -51,6 +51,12 @@
 //! deletion, box segmentation) and look-alike classes are `[mapper.association] lookalike`
 //! (`[]`: the label must match). All off / `[]` is the paper's mapper.
 
+/// The built-in `config/default.toml`, where this crate's sections (`[mapper]`) have their defaults.
+pub(crate) static DEFAULTS: settings::Defaults = settings::Defaults::new(
+    "config/default.toml",
+    include_str!("../../../config/default.toml"),
+);
+
 pub mod association;
 pub mod config;
 pub mod cuboid;

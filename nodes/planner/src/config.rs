@@ -99,7 +99,7 @@ pub struct AblationConfig {
 impl Default for AblationConfig {
     /// The `[planner.ablation]` section of the built-in `config/default.toml`.
     fn default() -> Self {
-        settings::DEFAULTS.section("planner.ablation")
+        crate::DEFAULTS.section("planner.ablation")
     }
 }
 
@@ -166,7 +166,7 @@ pub struct GbvConfig {
 impl Default for GbvConfig {
     /// The `[planner.gbv]` section of the built-in `config/default.toml`.
     fn default() -> Self {
-        settings::DEFAULTS.section("planner.gbv")
+        crate::DEFAULTS.section("planner.gbv")
     }
 }
 
@@ -205,7 +205,7 @@ pub struct LbvConfig {
 impl Default for LbvConfig {
     /// The `[planner.lbv]` section of the built-in `config/default.toml`.
     fn default() -> Self {
-        settings::DEFAULTS.section("planner.lbv")
+        crate::DEFAULTS.section("planner.lbv")
     }
 }
 
@@ -252,7 +252,7 @@ pub struct BootstrapConfig {
 impl Default for BootstrapConfig {
     /// The `[planner.bootstrap]` section of the built-in `config/default.toml`.
     fn default() -> Self {
-        settings::DEFAULTS.section("planner.bootstrap")
+        crate::DEFAULTS.section("planner.bootstrap")
     }
 }
 
@@ -283,7 +283,7 @@ pub struct CoverageConfig {
 impl Default for CoverageConfig {
     /// The `[planner.coverage]` section of the built-in `config/default.toml`.
     fn default() -> Self {
-        settings::DEFAULTS.section("planner.coverage")
+        crate::DEFAULTS.section("planner.coverage")
     }
 }
 
@@ -322,7 +322,7 @@ pub struct FrontierConfig {
 impl Default for FrontierConfig {
     /// The `[planner.frontier]` section of the built-in `config/default.toml`.
     fn default() -> Self {
-        settings::DEFAULTS.section("planner.frontier")
+        crate::DEFAULTS.section("planner.frontier")
     }
 }
 
@@ -354,7 +354,7 @@ pub struct GiveUpConfig {
 impl Default for GiveUpConfig {
     /// The `[planner.give_up]` section of the built-in `config/default.toml`.
     fn default() -> Self {
-        settings::DEFAULTS.section("planner.give_up")
+        crate::DEFAULTS.section("planner.give_up")
     }
 }
 
@@ -431,7 +431,7 @@ pub struct PlannerConfig {
 impl Default for PlannerConfig {
     /// The `[planner]` section of the built-in `config/default.toml`.
     fn default() -> Self {
-        settings::DEFAULTS.section("planner")
+        crate::DEFAULTS.section("planner")
     }
 }
 

@@ -65,6 +65,12 @@
 //! cluster.
 //! [`Summary`] reports the counts and [`Summary::reason`] the reason.
 
+/// The built-in `config/default.toml`, where this crate's sections (`[planner]`) have their defaults.
+pub(crate) static DEFAULTS: settings::Defaults = settings::Defaults::new(
+    "config/default.toml",
+    include_str!("../../../config/default.toml"),
+);
+
 pub mod baselines;
 pub mod clusters;
 pub mod config;

@@ -78,7 +78,7 @@ pub struct SimConfig {
 impl Default for SimConfig {
     /// The `[sim]` section of the built-in `config/default.toml`.
     fn default() -> Self {
-        settings::DEFAULTS.section("sim")
+        crate::DEFAULTS.section("sim")
     }
 }
 
@@ -205,7 +205,7 @@ pub struct DetectorConfig {
 impl Default for DetectorConfig {
     /// The `[detector]` section of the built-in `config/default.toml`.
     fn default() -> Self {
-        settings::DEFAULTS.section("detector")
+        crate::DEFAULTS.section("detector")
     }
 }
 
@@ -322,7 +322,7 @@ pub struct RobotConfig {
 impl Default for RobotConfig {
     /// The `[robot]` section of the built-in `config/default.toml`.
     fn default() -> Self {
-        settings::DEFAULTS.section("robot")
+        crate::DEFAULTS.section("robot")
     }
 }
 
@@ -385,7 +385,7 @@ pub struct SlamConfig {
 impl Default for SlamConfig {
     /// The `[robot.slam]` section of the built-in `config/default.toml`.
     fn default() -> Self {
-        settings::DEFAULTS.section("robot.slam")
+        crate::DEFAULTS.section("robot.slam")
     }
 }
 

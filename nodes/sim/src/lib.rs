@@ -29,6 +29,13 @@
 //! image rows) runs on the simulator's own named thread pool, [`SimPool`], not on rayon's global
 //! pool.
 
+/// The built-in `config/default.toml`, where this crate's sections (`[sim]`, `[detector]`,
+/// `[robot]`, `[scenegen]`) have their defaults.
+pub(crate) static DEFAULTS: settings::Defaults = settings::Defaults::new(
+    "config/default.toml",
+    include_str!("../../../config/default.toml"),
+);
+
 mod artefacts;
 mod camera;
 mod config;

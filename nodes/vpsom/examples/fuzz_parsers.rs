@@ -7,7 +7,7 @@
 //!
 //! Targets, each fed every input:
 //! - `config`: [`vpsom::config::Config::parse`], i.e. `settings::parse_toml` (TOML
-//!   syntax, error locations), `settings::DEFAULTS.parse` (merge over the built-in
+//!   syntax, error locations), `vpsom::config::DEFAULTS.parse` (merge over the built-in
 //!   defaults, `serde_path_to_error` key paths) and every section's range checks
 //!   (`nodes/vpsom/src/config.rs` and the sections it holds);
 //! - `scene`: [`vpsom::sim::Scene::parse`] (`nodes/sim/src/scene.rs`: keys, objects, rooms,

@@ -1,7 +1,10 @@
-//! The whole configuration of a session: one typed struct per `config/default.toml` section.
+//! The whole configuration of a session: one typed struct per section of `config/default.toml`
+//! and `config/runtime.toml`.
 //!
-//! Every default is stated once, in `config/default.toml` (built in as [`DEFAULT_TOML`]): a file is
-//! deep-merged over it, key by key, and the merged table is deserialised into these structs
+//! Every default is stated once: the runtime's sections (`[executor]`, `[ports]`, `[recorder]`)
+//! in `config/runtime.toml` (built into the runtime, `settings::RUNTIME_DEFAULTS`), every other
+//! in `config/default.toml` (built in here as [`DEFAULT_TOML`]). [`DEFAULTS`] layers the two; a
+//! file is deep-merged over them, key by key, and the merged table is deserialised into these structs
 //! (`deny_unknown_fields`, no `#[serde(default)]`), so a file sets only the keys it changes and an
 //! unknown key is an error naming the file and the key. Each section's `Default` is its section
 //! of the built-in file ([`settings::Defaults::section`]); each has a
@@ -13,9 +16,15 @@ use serde::Deserialize;
 use settings::{Checker, ConfigError};
 use std::path::{Path, PathBuf};
 
-/// The shipped defaults, built into the binary so it runs from any directory, and their path
-/// relative to the repository root.
-pub use settings::{DEFAULT_PATH, DEFAULT_TOML};
+/// The shipped defaults of the app's and the logic's sections, built into the binary so it runs
+/// from any directory.
+pub const DEFAULT_TOML: &str = include_str!("../../../config/default.toml");
+/// Their path relative to the repository root.
+pub const DEFAULT_PATH: &str = "config/default.toml";
+
+/// Every default: `config/default.toml` layered over the runtime's `config/runtime.toml`.
+pub static DEFAULTS: settings::Defaults =
+    settings::Defaults::layered(&settings::RUNTIME_DEFAULTS, DEFAULT_PATH, DEFAULT_TOML);
 
 /// All sections of a configuration file.
 #[derive(Debug, Clone, Deserialize)]
@@ -68,7 +77,7 @@ pub struct RatesConfig {
 impl Default for RatesConfig {
     /// The `[rates]` section of the built-in `config/default.toml`.
     fn default() -> Self {
-        settings::DEFAULTS.section("rates")
+        DEFAULTS.section("rates")
     }
 }
 
@@ -122,7 +131,7 @@ pub struct RunConfig {
 impl Default for RunConfig {
     /// The `[run]` section of the built-in `config/default.toml`.
     fn default() -> Self {
-        settings::DEFAULTS.section("run")
+        DEFAULTS.section("run")
     }
 }
 
@@ -196,7 +205,7 @@ pub const LINK_LIMITABLE: [&str; 2] = ["depth", "map"];
 impl Default for LinkConfig {
     /// The `[link]` section of the built-in `config/default.toml`.
     fn default() -> Self {
-        settings::DEFAULTS.section("link")
+        DEFAULTS.section("link")
     }
 }
 
@@ -246,7 +255,7 @@ pub struct BenchConfig {
 impl Default for BenchConfig {
     /// The `[bench]` section of the built-in `config/default.toml`.
     fn default() -> Self {
-        settings::DEFAULTS.section("bench")
+        DEFAULTS.section("bench")
     }
 }
 
@@ -288,7 +297,7 @@ pub struct SensingConfig {
 impl Default for SensingConfig {
     /// The `[sensing]` section of the built-in `config/default.toml`.
     fn default() -> Self {
-        settings::DEFAULTS.section("sensing")
+        DEFAULTS.section("sensing")
     }
 }
 
@@ -351,7 +360,7 @@ impl Config {
     /// Parse configuration text that came from `file` over the built-in defaults (keys it does
     /// not set keep their default), and validate it.
     pub fn parse(file: &Path, text: &str) -> Result<Self, ConfigError> {
-        let cfg: Config = settings::DEFAULTS.parse(file, text)?;
+        let cfg: Config = DEFAULTS.parse(file, text)?;
         cfg.validate(file)?;
         Ok(cfg)
     }
@@ -366,7 +375,9 @@ impl Config {
     }
 
     /// `file` if given; else `config/default.toml` in the working directory if present; else the
-    /// built-in copy of it. Returns the config and where it came from.
+    /// built-in copy of it; each merged over [`DEFAULTS`] (so the runtime's sections come from the
+    /// built-in `config/runtime.toml` unless the file sets them). Returns the config and where it
+    /// came from.
     pub fn load_or_default(file: Option<&Path>) -> Result<(Self, PathBuf), ConfigError> {
         match file {
             Some(f) => Ok((Self::load(f)?, f.to_path_buf())),
@@ -417,7 +428,7 @@ impl Config {
         self.bench.validate(&c)?;
         self.sensing.validate(&c)?;
         self.scenegen.validate(&c)?;
-        self.recorder.validate(&c)?;
+        self.recorder.validate(&c, &crate::recording::topics())?;
         self.link.validate(&c)
     }
 }

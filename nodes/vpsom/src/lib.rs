@@ -13,6 +13,7 @@
 //! | [`gridpng`] | a run's final exploration grid and its frontiers as `explore.png` |
 //! | [`lockstep`] | one process, one thread, simulated clock: deterministic sessions (bench, tests) |
 //! | [`bench`](mod@bench) | scenes × planners × seeds on the lockstep host, report and figures |
+//! | [`recording`] | what a trace holds: the recorder's converter, topics and messages of our messages |
 //! | [`replay`] | `vpsom replay`: the mapper and planner re-run on a trace's recorded inputs |
 //! | [`step`] | one step loop: the mapper and planner stepped on a simulated clock (lockstep, replay) |
 //! | [`sensing`] | `vpsom sensing`: a scripted tour of each scene, sensing scored against the ground truth |
@@ -25,6 +26,7 @@ pub mod config;
 pub mod deploy;
 pub mod gridpng;
 pub mod lockstep;
+pub mod recording;
 pub mod replay;
 pub mod sensing;
 pub mod step;

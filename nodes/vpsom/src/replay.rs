@@ -27,15 +27,15 @@
 
 use crate::config::Config;
 use crate::eval::{self, MatchParams};
+use crate::recording::messages as rec;
+use crate::recording::{MountGeometry, SceneConverter, convert, topic};
 use crate::sim::Scene;
 use crate::step::{NodeStep, Outputs};
-use runtime::recorder::convert;
+use foxglove::Decode;
+use foxglove::messages::{RawImage, SceneUpdate};
 use runtime::recorder::decode::MessageType;
-use runtime::recorder::foxglove::Decode;
-use runtime::recorder::foxglove::messages::{RawImage, SceneUpdate};
 use runtime::recorder::inspect::{Item, scan};
-use runtime::recorder::messages as rec;
-use runtime::recorder::schemas::{SESSION_METADATA, topic};
+use runtime::recorder::schemas::SESSION_METADATA;
 use runtime::recorder::{Recorder, RecorderError, RecorderSetup};
 use shm_types::{
     DepthFrame, Detections, Header, NavGoal, NeckGoal, ObjectMap, OccupancyGrid, PlannerDecision,
@@ -662,17 +662,13 @@ pub fn replay(spec: &ReplaySpec) -> Result<ReplayReport, ReplayError> {
         (Some(dir), false) => {
             std::fs::create_dir_all(dir)
                 .map_err(|e| ReplayError::Io(format!("{}: {e}", dir.display())))?;
+            let conv =
+                SceneConverter::new(&cfg.recorder, MountGeometry::from(&cfg.camera), Vec::new());
             let setup = RecorderSetup {
                 scene: inp.scene.clone().unwrap_or_default(),
-                mount: runtime::recorder::MountGeometry {
-                    height: cfg.camera.mount.height,
-                    forward_offset: cfg.camera.mount.forward_offset,
-                    hfov_deg: cfg.camera.hfov_deg,
-                    vfov_deg: cfg.camera.vfov_deg,
-                },
                 // Offline: the new trace waits for its writer rather than lose a message.
                 overflow: runtime::recorder::Overflow::Wait,
-                ..Default::default()
+                ..RecorderSetup::new(conv)
             };
             Some(Recorder::create(
                 &dir.join("trace.mcap"),

@@ -5,13 +5,13 @@
 //! --check` reproduces it exactly. (The live counterpart, a stalled writer that a publisher never
 //! waits for, is `runtime/tests/recorder_backpressure.rs`.)
 
-use runtime::recorder::schemas::topic;
 use runtime::recorder::{RecorderError, WriterHook, inspect};
 use std::sync::Arc;
 use std::sync::atomic::{AtomicU64, Ordering};
 use std::time::Duration;
 use vpsom::config::Config;
 use vpsom::lockstep::{self, Progress, SessionSpec};
+use vpsom::recording::topic;
 use vpsom::replay::{self, ReplaySpec};
 use vpsom::sim::Scene;
 

@@ -2,10 +2,11 @@
 //! decision and goal exactly (`--check`), a changed planner is reported as a divergence, and an
 //! open-loop replay with another planner writes a new trace and its decision list.
 
-use runtime::recorder::{inspect, schemas::topic};
+use runtime::recorder::inspect;
 use std::path::PathBuf;
 use vpsom::config::Config;
 use vpsom::lockstep::{self, SessionSpec};
+use vpsom::recording::topic;
 use vpsom::replay::{self, ReplaySpec};
 use vpsom::sim::Scene;
 

@@ -18,7 +18,6 @@
 #![cfg(feature = "link")]
 
 use runtime::recorder::inspect::{self, TraceInfo};
-use runtime::recorder::schemas::topic;
 use std::io::{Read, Write};
 use std::net::{Shutdown, TcpListener, TcpStream};
 use std::path::{Path, PathBuf};
@@ -27,6 +26,7 @@ use std::sync::atomic::{AtomicBool, Ordering};
 use std::sync::{Arc, Mutex};
 use std::thread::JoinHandle;
 use std::time::{Duration, Instant};
+use vpsom::recording::topic;
 
 /// Hang guard for one run (a session takes ~1 min here; a loaded CI machine is slower).
 const RUN_LIMIT: Duration = Duration::from_secs(900);

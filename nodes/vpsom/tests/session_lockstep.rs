@@ -2,11 +2,12 @@
 //! recorded session leaves an MCAP that independent readers accept with the counts the host
 //! handed over (written + counted drops).
 
-use runtime::recorder::{inspect, schemas::topic};
+use runtime::recorder::inspect;
 use std::path::PathBuf;
 use vpsom::config::Config;
 use vpsom::lockstep::{self, SessionSpec};
 use vpsom::planner::PlannerStatus;
+use vpsom::recording::topic;
 use vpsom::sim::Scene;
 
 fn spec(label: &str, record: Option<PathBuf>) -> SessionSpec {

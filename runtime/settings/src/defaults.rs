@@ -1,6 +1,10 @@
-//! Defaults stated once: a complete TOML file built into the binary ([`Defaults`]) gives every
-//! key its default; a user file is deep-merged over it ([`merge_tables`]) and the merged table
+//! Defaults stated once: complete TOML files built into the binary ([`Defaults`]) give every
+//! key its default; a user file is deep-merged over them ([`merge_tables`]) and the merged table
 //! is deserialised into structs with `deny_unknown_fields` and no `#[serde(default)]`.
+//!
+//! Each owner builds in its own file: the runtime `config/runtime.toml` ([`RUNTIME_DEFAULTS`],
+//! its `[executor]`, `[ports]` and `[recorder]`), the logic crates and the app
+//! `config/default.toml`; the app's defaults are both, layered ([`Defaults::layered`]).
 //!
 //! So a user file sets only the keys it changes, an unknown key is still an error naming the
 //! file and the key, and a section's `Default` is that section of the built-in file
@@ -12,20 +16,23 @@ use serde::de::DeserializeOwned;
 use std::path::Path;
 use std::sync::OnceLock;
 
-/// The shipped `config/default.toml` (rates, budgets, camera, planner parameters, and the
-/// runtime's `[executor]`, `[ports]` and `[recorder]` sections), built into every binary.
-pub const DEFAULT_TOML: &str = include_str!("../../../config/default.toml");
-/// Path of the shipped defaults relative to the repository root.
-pub const DEFAULT_PATH: &str = "config/default.toml";
+/// The shipped `config/runtime.toml`: the runtime's own sections (`[executor]`, `[ports]`,
+/// `[recorder]`), built into every binary.
+pub const RUNTIME_TOML: &str = include_str!("../../../config/runtime.toml");
+/// Path of the runtime's shipped defaults relative to the repository root.
+pub const RUNTIME_PATH: &str = "config/runtime.toml";
 
-/// The defaults of `config/default.toml`: every section's `Default` comes from here.
-pub static DEFAULTS: Defaults = Defaults::new(DEFAULT_PATH, DEFAULT_TOML);
+/// The defaults of `config/runtime.toml`: the runtime's sections' `Default`s come from here.
+pub static RUNTIME_DEFAULTS: Defaults = Defaults::new(RUNTIME_PATH, RUNTIME_TOML);
 
-/// A complete configuration file built into the binary: the default of every key.
+/// A complete configuration file built into the binary: the default of every key (of its
+/// sections), possibly over another such file ([`Defaults::layered`]).
 #[derive(Debug)]
 pub struct Defaults {
     file: &'static str,
     text: &'static str,
+    /// Defaults this file is layered over (their sections, merged with this file's).
+    base: Option<&'static Defaults>,
     table: OnceLock<toml::Table>,
 }
 
@@ -35,6 +42,19 @@ impl Defaults {
         Self {
             file,
             text,
+            base: None,
+            table: OnceLock::new(),
+        }
+    }
+
+    /// Defaults from `text` (the built-in copy of `file`) deep-merged over `base`: how the app
+    /// assembles its sections' file and the runtime's into one set of defaults. Each file
+    /// should state its own sections (a key in both takes `text`'s value).
+    pub const fn layered(base: &'static Defaults, file: &'static str, text: &'static str) -> Self {
+        Self {
+            file,
+            text,
+            base: Some(base),
             table: OnceLock::new(),
         }
     }
@@ -49,14 +69,22 @@ impl Defaults {
         self.text
     }
 
-    /// The parsed table (parsed once).
+    /// The parsed table, merged over the base's if layered (parsed once).
     ///
     /// # Panics
     /// If the built-in text is not valid TOML (a test of each file covers this).
     pub fn table(&self) -> &toml::Table {
         self.table.get_or_init(|| {
-            super::parse_toml(Path::new(self.file), self.text)
-                .unwrap_or_else(|e| panic!("the built-in {} is not valid TOML: {e}", self.file))
+            let own: toml::Table = super::parse_toml(Path::new(self.file), self.text)
+                .unwrap_or_else(|e| panic!("the built-in {} is not valid TOML: {e}", self.file));
+            match self.base {
+                Some(base) => {
+                    let mut t = base.table().clone();
+                    merge_tables(&mut t, own);
+                    t
+                }
+                None => own,
+            }
         })
     }
 
@@ -260,7 +288,31 @@ mod tests {
 
     #[test]
     fn the_shipped_file_parses() {
-        assert!(DEFAULTS.table().contains_key("executor"));
-        assert_eq!(DEFAULTS.file(), DEFAULT_PATH);
+        let t = RUNTIME_DEFAULTS.table();
+        let mut sections: Vec<&str> = t.keys().map(String::as_str).collect();
+        sections.sort_unstable();
+        assert_eq!(sections, ["executor", "ports", "recorder"]);
+        assert_eq!(RUNTIME_DEFAULTS.file(), RUNTIME_PATH);
+    }
+
+    static BASE: Defaults = Defaults::new("base.toml", "[rate]\nhz = 10.0\ncpus = [0, 1]\n");
+    static LAYERED: Defaults =
+        Defaults::layered(&BASE, "top.toml", "name = \"a\"\n[rate]\nmode = \"fast\"\n");
+
+    #[test]
+    fn layered_defaults_merge_over_their_base() {
+        let r: Root = LAYERED.section("");
+        assert_eq!(r, D.section::<Root>(""));
+        let r: Root = LAYERED
+            .parse(Path::new("u.toml"), "[rate]\nhz = 5.0\n")
+            .unwrap();
+        assert_eq!((r.rate.hz, r.rate.cpus.as_slice()), (5.0, &[0, 1][..]));
+        let e = LAYERED
+            .parse::<Root>(Path::new("u.toml"), "[rate]\nhzz = 5.0\n")
+            .unwrap_err();
+        assert_eq!(
+            e.to_string().split(": ").take(2).collect::<Vec<_>>(),
+            ["u.toml", "rate.hzz"]
+        );
     }
 }

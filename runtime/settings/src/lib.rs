@@ -7,7 +7,7 @@
 //! |---|---|
 //! | `lib.rs` | [`ConfigError`], [`Checker`] (range checks), [`parse_toml`] / [`load_toml`] |
 //! | `ranges.rs` | [`ranges!`]: a section's range checks declared field by field, keys from the field names |
-//! | `defaults.rs` | [`Defaults`]: a built-in complete file ([`DEFAULTS`] = `config/default.toml`) that states every default once; user files merge over it |
+//! | `defaults.rs` | [`Defaults`]: a built-in complete file that states every default of its sections once ([`RUNTIME_DEFAULTS`] = `config/runtime.toml`; the app's `config/default.toml` layered over it); user files merge over it |
 
 use serde::de::DeserializeOwned;
 use std::fmt;
@@ -15,7 +15,7 @@ use std::path::{Path, PathBuf};
 
 mod defaults;
 mod ranges;
-pub use defaults::{DEFAULT_PATH, DEFAULT_TOML, DEFAULTS, Defaults, merge_tables};
+pub use defaults::{Defaults, RUNTIME_DEFAULTS, RUNTIME_PATH, RUNTIME_TOML, merge_tables};
 pub use ranges::Count;
 
 /// Why a configuration file was refused.

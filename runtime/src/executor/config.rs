@@ -89,9 +89,9 @@ pub struct ExecutorConfig {
 }
 
 impl Default for ExecutorConfig {
-    /// The `[executor]` section of the built-in `config/default.toml`.
+    /// The `[executor]` section of the built-in `config/runtime.toml`.
     fn default() -> Self {
-        crate::config::DEFAULTS.section("executor")
+        crate::config::RUNTIME_DEFAULTS.section("executor")
     }
 }
 

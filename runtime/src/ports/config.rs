@@ -26,7 +26,7 @@ pub enum Overflow {
 /// [`TopicSettings`] (resolved values), [`TopicOverride`] (the same keys, each optional),
 /// [`PortsConfig`] (`namespace`, the same keys as every topic's defaults, and `topics`) and the
 /// merge `PortsConfig::settings_with`. The defaults are the `[ports]` section of
-/// `config/default.toml` (`PortsConfig::default()`).
+/// `config/runtime.toml` (`PortsConfig::default()`).
 macro_rules! topic_settings {
     ($( $(#[doc = $doc:literal])+ $field:ident: $ty:ty, )+) => {
         /// Settings of one topic's services (the `[ports]` defaults merged with a per-topic
@@ -99,10 +99,10 @@ topic_settings! {
 }
 
 impl Default for PortsConfig {
-    /// The `[ports]` section of the built-in `config/default.toml`, with its per-topic
+    /// The `[ports]` section of the built-in `config/runtime.toml`, with its per-topic
     /// overrides (`[ports.topics.<topic>]`).
     fn default() -> Self {
-        crate::config::DEFAULTS.section("ports")
+        crate::config::RUNTIME_DEFAULTS.section("ports")
     }
 }
 

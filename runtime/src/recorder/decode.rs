@@ -1,6 +1,7 @@
 //! Reading messages back through the schema stored in the file (`prost-reflect`): any channel to
 //! JSON (the protobuf JSON mapping with proto field names, defaults included, 64-bit integers as
-//! numbers, `bytes` as base64) and our own [`super::messages`] types back into Rust values.
+//! numbers, `bytes` as base64) and the types deriving `foxglove::Encode` and `Deserialize` (the
+//! runtime's [`super::messages`], the app's own) back into Rust values.
 
 use prost_reflect::{DescriptorPool, DynamicMessage, MessageDescriptor, SerializeOptions};
 use serde::de::DeserializeOwned;
@@ -51,7 +52,7 @@ impl MessageType {
 
 #[cfg(test)]
 mod tests {
-    use super::super::messages::{Candidate, DetectionRaw, DetectionsRaw, PlannerDecision};
+    use super::super::messages::{DeadlineEvent, InputHealth, MetricValue, Metrics, NodeHealth};
     use super::*;
     use foxglove::Encode;
 
@@ -65,35 +66,38 @@ mod tests {
 
     #[test]
     fn own_types_read_back_exactly() {
-        let d = PlannerDecision {
+        let h = NodeHealth {
             seq: u64::MAX - 3,
-            kind: "gbv".into(),
-            cluster_id: -1,
-            chosen_value: 0.1 + 0.2,
-            candidates: vec![
-                Candidate {
-                    position: vec![1.0e-7, -3.25, 1.4],
-                    value: f32::MAX,
-                    chosen: true,
+            node: "mapper".into(),
+            pid: 7,
+            inputs: vec![
+                InputHealth {
+                    topic: "depth".into(),
+                    received: 1 << 40,
+                    invalid: 1,
                     ..Default::default()
                 },
-                Candidate::default(),
+                InputHealth::default(),
             ],
             ..Default::default()
         };
-        assert_eq!(roundtrip(&d), d);
-        let x = DetectionsRaw {
-            frame_seq: 7,
-            items: vec![DetectionRaw {
-                class_id: 56,
-                bbox: vec![1, 2, 3, 4],
-                score: 0.3,
-                ..Default::default()
-            }],
-            labels: foxglove::bytes::Bytes::from_static(&[0, 1, 2, 255]),
+        assert_eq!(roundtrip(&h), h);
+        let e = DeadlineEvent {
+            lateness_ns: -5,
+            exec_ns: u64::MAX,
+            miss: true,
+            miss_cause: "exec".into(),
             ..Default::default()
         };
-        assert_eq!(roundtrip(&x), x);
+        assert_eq!(roundtrip(&e), e);
+        let m = Metrics {
+            values: vec![MetricValue {
+                key: "a.b".into(),
+                value: 0.1 + 0.2,
+            }],
+            json: "{}".into(),
+        };
+        assert_eq!(roundtrip(&m), m);
     }
 
     #[test]

@@ -1,13 +1,18 @@
 //! The MCAP recorder: every topic of a session into one file that Foxglove and any MCAP tool can
 //! open, and that `vpsom replay` can re-run the robot's logic on.
 //!
+//! The recorder writes what it is given: the app supplies a [`Converter`] ([`RecorderSetup`])
+//! that names its channels (topics and schemas) and turns each recorded input into messages on
+//! them. The recorder owns the rest: the producer side, the writer thread, channel and schema
+//! registration, rate limits, overflow, stats, the live view, recovery, and reading traces back.
+//!
 //! | file | what |
 //! |---|---|
-//! | `mod.rs` | [`Recorder`], [`RecorderHandle`], config and profiles, drop counting |
-//! | `writer.rs` | the writer thread: encoding, rate limits, chunks, flushing, stats |
-//! | `convert.rs` | our messages → `foxglove::messages::*` and [`messages`] values |
-//! | `messages.rs` | our own channels' types (protobuf, schemas derived by `foxglove::Encode`) |
-//! | `schemas.rs` | topics and the schema of every channel |
+//! | `mod.rs` | [`Recorder`], [`RecorderHandle`], [`RecorderSetup`], config and profiles, drop counting |
+//! | `writer.rs` | the writer thread and its [`Sink`]: encoding, rate limits, chunks, flushing, stats |
+//! | `convert.rs` | [`Converter`] (what the app supplies), the producer-side copies, the runtime's own messages' conversion |
+//! | `messages.rs` | the runtime's own channels' types (protobuf, schemas derived by `foxglove::Encode`) |
+//! | `schemas.rs` | [`schemas::ChannelDef`], the runtime's own topics and their schemas |
 //! | `decode.rs` | reading any channel back through the schema in the file |
 //! | `inspect.rs` | reading traces back: `info`, CSV export (all segments of a run) |
 //! | `recover.rs` | torn-file recovery and the run's segments |
@@ -19,16 +24,16 @@
 //! never block and never allocate for the real-time kinds (state, goals, deadline events, planner
 //! decisions): small messages are copied by value into a bounded crossbeam channel; large ones
 //! (`DepthFrame`, `Detections`, `ObjectMap`, `PlannerDecision`) are copied into preallocated
-//! boxes taken from a pool. Conversion and encoding happen on the writer thread, which also
-//! publishes every encoded message to the live view ([`live`]) when one is attached.
+//! boxes taken from a pool. Conversion (by the [`Converter`]) and encoding happen on the writer
+//! thread, which also publishes every encoded message to the live view ([`live`]) when one is
+//! attached.
 //!
 //! # Profiles: `replay` and `view`
-//! `recorder.profile = "replay"` (the default) records every input the mapper and planner
-//! consume, losslessly: full-resolution depth (`/camera/depth` + `/camera/depth/meta`), the raw
-//! detections (`/detections`), every robot state (`/robot/state`), the navigation grid
-//! (`/nav/grid`), plus what they published. `"view"` is for long runs: every topic named in
-//! `[recorder.view.max_hz]` is written at most that often (simulated time; 0 = not at all) and
-//! depth is decimated by `recorder.view.depth_decimation`. What a rate limit leaves out is
+//! `recorder.profile = "replay"` (the default) writes every message the converter makes (an app
+//! converts every input of its logic losslessly, so a trace can be replayed). `"view"` is for
+//! long runs: every topic named in `[recorder.view.max_hz]` is written at most that often
+//! (simulated time; 0 = not at all), and the converter is to decimate depth by
+//! [`RecorderConfig::depth_decimation`]. What a rate limit leaves out is
 //! counted per topic as `throttled` (not a drop) in `/recorder/stats` and the final metadata.
 //!
 //! # Falling behind
@@ -71,24 +76,13 @@
 //! bytes. Our own types ([`messages`]) have schemas derived by `foxglove::Encode`.
 //!
 //! # Topics
+//! The app's channels are its converter's (the app's are listed in `vpsom::recording`). Each
+//! input kind ([`Kind`]) has one primary topic that carries one message per accepted input
+//! ([`Converter::topic`]); offers and drops are counted under it. The runtime's own channels
+//! follow the app's:
+//!
 //! | topic | schema | from |
 //! |---|---|---|
-//! | `/camera/depth` | `foxglove.RawImage` (`16UC1`) | [`RecorderHandle::record_depth`] |
-//! | `/camera/calibration` | `foxglove.CameraCalibration` | same |
-//! | `/camera/depth/meta` | [`messages::DepthMeta`] (header, intrinsics, camera pose) | same |
-//! | `/camera/detections` | `foxglove.ImageAnnotations` on the depth image | [`RecorderHandle::record_detections`] |
-//! | `/detections` | [`messages::DetectionsRaw`] | same |
-//! | `/robot/state` | [`messages::RobotStateRaw`] | [`RecorderHandle::record_state`] |
-//! | `/nav/grid` | [`messages::OccupancyGridRaw`] | [`RecorderHandle::record_nav_grid`] |
-//! | `/tf` | `foxglove.FrameTransforms` world→base→neck→camera | [`RecorderHandle::record_state`] |
-//! | `/trajectory` | `foxglove.PosesInFrame` (estimated base) | state, at `trajectory_hz` |
-//! | `/truth/tf`, `/truth/trajectory` | same, frame `base_true` | [`RecorderHandle::record_true_state`] |
-//! | `/truth/objects` | `foxglove.SceneUpdate` | [`RecorderSetup::truth`] |
-//! | `/map/objects` | `foxglove.SceneUpdate` | [`RecorderHandle::record_map`] |
-//! | `/map/meta` | [`messages::MapMeta`] (the frames each map consumed) | same |
-//! | `/planner/gbv`, `/planner/lbv` | `foxglove.SceneUpdate` frusta | [`RecorderHandle::record_decision`] |
-//! | `/planner/decisions` | [`messages::PlannerDecision`] (every F(v) term) | same |
-//! | `/planner/nav_goal`, `/planner/neck_goal` | [`messages::NavGoal`], [`messages::NeckGoal`] | `record_*_goal` |
 //! | `/runtime/deadline` | [`messages::DeadlineEvent`] | [`RecorderHandle::record_deadline`] |
 //! | `/runtime/health` | [`messages::NodeHealth`] | [`RecorderHandle::record_health`] |
 //! | `/runtime/latency` | [`messages::LatencySummary`] | [`RecorderHandle::record_latency`] |
@@ -98,8 +92,6 @@
 //!
 //! Log time of a message is its simulated/robot time (`header.sim_time_ns`), publish time its
 //! monotonic stamp (`header.stamp_ns`), so lockstep and deployment traces share one time base.
-//! `config/foxglove-layout.json` is a Foxglove layout for these topics (3D, depth with the
-//! detection boxes, LBV exec time).
 
 pub mod convert;
 pub mod decode;
@@ -110,6 +102,9 @@ pub mod messages;
 pub mod recover;
 pub mod schemas;
 mod writer;
+
+pub use convert::Converter;
+pub use writer::Sink;
 
 /// The `foxglove` crate the recorder writes with (its messages decode a trace's Foxglove channels).
 pub use foxglove;
@@ -241,11 +236,12 @@ pub struct RecorderConfig {
     pub pool_len: usize,
     /// Period of the `/recorder/stats` messages, seconds.
     pub stats_interval_s: f64,
-    /// Rate of the `/trajectory` messages (simulated time), Hz.
+    /// For the app's converter: rate of its trajectory messages (simulated time), Hz.
     pub trajectory_hz: f64,
-    /// Most poses kept in a trajectory message (older ones are thinned by 2 when exceeded).
+    /// For the app's converter: most poses kept in a trajectory message (older ones are thinned
+    /// by 2 when exceeded).
     pub trajectory_max_poses: usize,
-    /// Length of the drawn candidate-view frusta, metres.
+    /// For the app's converter: length of the drawn candidate-view frusta, metres.
     pub frustum_length_m: f64,
     /// Port of the live view when `vpsom run --live` names none.
     pub live_port: u16,
@@ -254,9 +250,9 @@ pub struct RecorderConfig {
 }
 
 impl Default for RecorderConfig {
-    /// The `[recorder]` section of the built-in `config/default.toml`.
+    /// The `[recorder]` section of the built-in `config/runtime.toml`.
     fn default() -> Self {
-        crate::config::DEFAULTS.section("recorder")
+        crate::config::RUNTIME_DEFAULTS.section("recorder")
     }
 }
 
@@ -277,8 +273,9 @@ impl RecorderConfig {
         }
     }
 
-    /// Range-check the `[recorder]` section and `[recorder.view]`.
-    pub fn validate(&self, c: &Checker) -> Result<(), ConfigError> {
+    /// Range-check the `[recorder]` section and `[recorder.view]`; `topics` are the channels a
+    /// trace has (the app's and the runtime's own), which `[recorder.view.max_hz]` may name.
+    pub fn validate(&self, c: &Checker, topics: &[&str]) -> Result<(), ConfigError> {
         let c = &c.at("recorder");
         settings::ranges!(c, self, {
             compression_level: count(0, 19),
@@ -293,7 +290,6 @@ impl RecorderConfig {
             depth_decimation: count(1, 16),
         });
         let max_hz = view.at(stringify!(max_hz));
-        let topics: Vec<&str> = schemas::channels().iter().map(|d| d.topic).collect();
         for (t, &hz) in &self.view.max_hz {
             let key = max_hz.key(&format!("\"{t}\""));
             c.require(
@@ -314,57 +310,14 @@ impl RecorderConfig {
     }
 }
 
-/// A ground-truth object for `/truth/objects` (given once at start).
-#[derive(Debug, Clone, PartialEq, Serialize)]
-pub struct TruthBox {
-    /// Unique name in the scene.
-    pub name: String,
-    /// COCO class name.
-    pub class: String,
-    /// Centre, world frame, metres.
-    pub center: [f32; 3],
-    /// Extent along the object's x, y, z, metres.
-    pub size: [f32; 3],
-    /// Yaw about +z, radians.
-    pub yaw: f32,
-}
-
-/// Where the camera sits on the robot (the static part of world→base→neck→camera).
-#[derive(Debug, Clone, Copy, PartialEq)]
-pub struct MountGeometry {
-    /// Height of the camera above the floor, metres.
-    pub height: f32,
-    /// Offset of the neck axis ahead of the base centre, metres.
-    pub forward_offset: f32,
-    /// Horizontal field of view, degrees (for the drawn frusta).
-    pub hfov_deg: f32,
-    /// Vertical field of view, degrees.
-    pub vfov_deg: f32,
-}
-
-impl Default for MountGeometry {
-    /// The shipped camera: `[camera.mount]` and the fields of view of `[camera]` in the built-in
-    /// `config/default.toml`.
-    fn default() -> Self {
-        let value = |key: &str| -> f32 { crate::config::DEFAULTS.section(key) };
-        Self {
-            height: value("camera.mount.height"),
-            forward_offset: value("camera.mount.forward_offset"),
-            hfov_deg: value("camera.hfov_deg"),
-            vfov_deg: value("camera.vfov_deg"),
-        }
-    }
-}
-
-/// Static facts about the session, written once at start.
-#[derive(Debug, Clone, Default, PartialEq)]
+/// What a recording is of: the app's [`Converter`] and static facts about the session, written
+/// once at start.
+#[derive(Debug)]
 pub struct RecorderSetup {
+    /// The app's channels and how its inputs become messages on them.
+    pub converter: Box<dyn Converter>,
     /// Scene name (MCAP metadata `session`).
     pub scene: String,
-    /// Camera mount.
-    pub mount: MountGeometry,
-    /// Ground-truth objects (empty in deployment on a real robot).
-    pub truth: Vec<TruthBox>,
     /// Serve the recorded channels live to Foxglove on this port ([`live`]; 0 = any free port).
     pub live_port: Option<u16>,
     /// The host that ran the logic (MCAP metadata `session`, key `host`): `lockstep` (one
@@ -376,6 +329,20 @@ pub struct RecorderSetup {
     pub overflow: Overflow,
     /// For tests: called by the writer thread before each message it writes.
     pub writer_hook: Option<WriterHook>,
+}
+
+impl RecorderSetup {
+    /// A setup with `converter`, no scene name, no live view, host unknown, [`Overflow::Drop`].
+    pub fn new(converter: impl Converter + 'static) -> Self {
+        Self {
+            converter: Box::new(converter),
+            scene: String::new(),
+            live_port: None,
+            host: String::new(),
+            overflow: Overflow::Drop,
+            writer_hook: None,
+        }
+    }
 }
 
 /// Latency of one node or path over the last summary period.
@@ -442,7 +409,8 @@ pub enum LogLevel {
     Fatal = 5,
 }
 
-/// Kinds of recorded input; each has one primary topic under which its drops are counted.
+/// Kinds of recorded input; each has one primary topic under which its offers and drops are
+/// counted (the runtime's own for the runtime's kinds, [`Converter::topic`] for the others).
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
 pub enum Kind {
     /// Depth frames.
@@ -494,25 +462,22 @@ impl Kind {
         Kind::Metrics,
     ];
 
-    /// The topic that carries exactly one message per accepted input of this kind (in the
-    /// `replay` profile; the `view` profile's rate limits leave some out, counted as throttled).
-    pub fn topic(self) -> &'static str {
+    /// Whether the app's [`Converter`] converts this kind (the shared-memory messages of the
+    /// robot's logic), rather than the recorder (the runtime's own inputs).
+    pub fn converted(self) -> bool {
+        self.own_topic().is_none()
+    }
+
+    /// The runtime's own topic of this kind, `None` for the kinds the converter converts.
+    fn own_topic(self) -> Option<&'static str> {
         use schemas::topic;
         match self {
-            Kind::Depth => topic::DEPTH,
-            Kind::Detections => topic::DETECTIONS,
-            Kind::NavGrid => topic::NAV_GRID,
-            Kind::State => topic::TF,
-            Kind::TrueState => topic::TRUTH_TF,
-            Kind::Map => topic::MAP,
-            Kind::Decision => topic::DECISIONS,
-            Kind::NavGoal => topic::NAV_GOAL,
-            Kind::NeckGoal => topic::NECK_GOAL,
-            Kind::Deadline => topic::DEADLINE,
-            Kind::Health => topic::HEALTH,
-            Kind::Latency => topic::LATENCY,
-            Kind::Log => topic::LOG,
-            Kind::Metrics => topic::METRICS,
+            Kind::Deadline => Some(topic::DEADLINE),
+            Kind::Health => Some(topic::HEALTH),
+            Kind::Latency => Some(topic::LATENCY),
+            Kind::Log => Some(topic::LOG),
+            Kind::Metrics => Some(topic::METRICS),
+            _ => None,
         }
     }
 }
@@ -606,6 +571,8 @@ impl<T: ZeroValid> Pool<T> {
 #[derive(Debug)]
 struct Shared {
     counters: Counters,
+    /// The primary topic of each kind (offers and drops are counted under it).
+    topics: [&'static str; KINDS],
     overflow: Overflow,
     /// Set when the writer thread has ended (finished, failed or panicked).
     writer_stopped: AtomicBool,
@@ -617,9 +584,15 @@ struct Shared {
 }
 
 impl Shared {
-    fn new(overflow: Overflow, depth_queue_len: usize, pool_len: usize) -> Self {
+    fn new(
+        topics: [&'static str; KINDS],
+        overflow: Overflow,
+        depth_queue_len: usize,
+        pool_len: usize,
+    ) -> Self {
         Self {
             counters: Counters::default(),
+            topics,
             overflow,
             writer_stopped: AtomicBool::new(false),
             // Waiting, the ring holds every depth buffer, so no queued frame is ever replaced.
@@ -645,7 +618,7 @@ impl Shared {
     fn drop_counts(&self) -> DropCounts {
         let mut d = DropCounts::default();
         for k in Kind::ALL {
-            let t = k.topic().to_string();
+            let t = self.topics[k as usize].to_string();
             d.offered.insert(
                 t.clone(),
                 self.counters.offered[k as usize].load(Ordering::Relaxed),
@@ -783,7 +756,7 @@ impl RecorderHandle {
         }
     }
 
-    /// Record a depth frame (`/camera/depth`). Copies the used pixels into a preallocated buffer;
+    /// Record a depth frame ([`Converter::depth`]). Copies the used pixels into a preallocated buffer;
     /// if all are queued, the oldest queued frame is dropped (and counted) to make room
     /// ([`Overflow::Drop`]), or the call waits until the writer has taken one ([`Overflow::Wait`]).
     pub fn record_depth(&self, frame: &DepthFrame) {
@@ -821,8 +794,7 @@ impl RecorderHandle {
         let _ = self.wake.try_send(());
     }
 
-    /// Record detections (`/detections`, and `/camera/detections` drawn on the depth image of
-    /// the frame they belong to), copied into a pooled buffer.
+    /// Record detections ([`Converter::detections`]), copied into a pooled buffer.
     pub fn record_detections(&self, d: &Detections) {
         if let Some(mut b) = self.take(Kind::Detections, &self.shared.detections_pool) {
             convert::copy_detections(d, &mut b);
@@ -830,7 +802,7 @@ impl RecorderHandle {
         }
     }
 
-    /// Record the navigation grid (`/nav/grid`). Allocates a copy: grids are rare (the sim
+    /// Record the navigation grid ([`Converter::nav_grid`]). Allocates a copy: grids are rare (the sim
     /// publishes one a second); not for a real-time thread.
     pub fn record_nav_grid(&self, g: &OccupancyGrid) {
         let mut b = boxed_zeroed::<OccupancyGrid>();
@@ -844,17 +816,17 @@ impl RecorderHandle {
         self.push(Kind::NavGrid, Msg::NavGrid(b));
     }
 
-    /// Record the estimated robot state (`/robot/state`, `/tf`, `/trajectory`).
+    /// Record the estimated robot state ([`Converter::state`]).
     pub fn record_state(&self, state: &RobotState) {
         self.push(Kind::State, Msg::State(*state));
     }
 
-    /// Record the true robot state (`/truth/tf`, `/truth/trajectory`); simulation only.
+    /// Record the true robot state ([`Converter::true_state`]); simulation only.
     pub fn record_true_state(&self, state: &RobotState) {
         self.push(Kind::TrueState, Msg::TrueState(*state));
     }
 
-    /// Record an object map (`/map/objects`), copied into a pooled buffer.
+    /// Record an object map ([`Converter::map`]), copied into a pooled buffer.
     pub fn record_map(&self, map: &ObjectMap) {
         if let Some(mut b) = self.take(Kind::Map, &self.shared.map_pool) {
             b.copy_from(map);
@@ -862,8 +834,7 @@ impl RecorderHandle {
         }
     }
 
-    /// Record a planner decision (`/planner/decisions` and `/planner/gbv` or `/planner/lbv`),
-    /// copied into a pooled buffer.
+    /// Record a planner decision ([`Converter::decision`]), copied into a pooled buffer.
     pub fn record_decision(&self, d: &PlannerDecision) {
         if let Some(mut b) = self.take(Kind::Decision, &self.shared.decision_pool) {
             convert::copy_decision(d, &mut b);
@@ -871,12 +842,12 @@ impl RecorderHandle {
         }
     }
 
-    /// Record a navigation goal (`/planner/nav_goal`).
+    /// Record a navigation goal ([`Converter::nav_goal`]).
     pub fn record_nav_goal(&self, g: &NavGoal) {
         self.push(Kind::NavGoal, Msg::NavGoal(*g));
     }
 
-    /// Record a neck goal (`/planner/neck_goal`).
+    /// Record a neck goal ([`Converter::neck_goal`]).
     pub fn record_neck_goal(&self, g: &NeckGoal) {
         self.push(Kind::NeckGoal, Msg::NeckGoal(*g));
     }
@@ -1029,12 +1000,17 @@ impl Recorder {
     ) -> Result<Recorder, RecorderError> {
         let (tx, rx): (Sender<Msg>, Receiver<Msg>) = crossbeam::channel::bounded(cfg.queue_len);
         let (wake, wake_rx) = crossbeam::channel::bounded(1);
+        let conv = &setup.converter;
+        let topics = Kind::ALL.map(|k| k.own_topic().unwrap_or_else(|| conv.topic(k)));
+        let mut defs = conv.channels();
+        defs.extend(schemas::own_channels());
         let shared = Arc::new(Shared::new(
+            topics,
             setup.overflow,
             cfg.depth_queue_len,
             cfg.pool_len,
         ));
-        let w = writer::WriterState::open(path, cfg, &setup)?;
+        let w = writer::WriterState::open(path, cfg, setup, &defs)?;
         let live_port = w.live_port();
         let sh = Arc::clone(&shared);
         let thread = std::thread::Builder::new()
@@ -1120,15 +1096,25 @@ mod tests {
     }
 
     fn parse(f: &Path, text: &str) -> Result<Root, ConfigError> {
-        crate::config::DEFAULTS.parse(f, text)
+        crate::config::RUNTIME_DEFAULTS.parse(f, text)
+    }
+
+    /// Validate `r` as for a trace whose channels are those the shipped `[recorder.view.max_hz]`
+    /// names (an app's) and the runtime's own.
+    fn validate(r: &RecorderConfig, c: &Checker) -> Result<(), ConfigError> {
+        let shipped = RecorderConfig::default().view.max_hz;
+        let mut topics: Vec<&str> = shipped.keys().map(String::as_str).collect();
+        topics.extend(schemas::own_channels().iter().map(|c| c.topic));
+        r.validate(c, &topics)
     }
 
     #[test]
     fn shipped_section_validates() {
-        RecorderConfig::default()
-            .validate(&Checker::new("config/default.toml"))
-            .unwrap();
-        assert_eq!(MountGeometry::default().height, 1.4);
+        validate(
+            &RecorderConfig::default(),
+            &Checker::new("config/runtime.toml"),
+        )
+        .unwrap();
     }
 
     #[test]
@@ -1136,22 +1122,22 @@ mod tests {
         let f = Path::new("bad.toml");
         let c = Checker::new("bad.toml");
         let r = parse(f, "[recorder.view]\ndepth_decimation = 0\n").unwrap();
-        let e = r.recorder.validate(&c).unwrap_err();
+        let e = validate(&r.recorder, &c).unwrap_err();
         assert_eq!(
             e.to_string(),
             "bad.toml: recorder.view.depth_decimation = 0: must be in [1, 16]"
         );
         let r = parse(f, "[recorder.view.max_hz]\n\"/camera/dept\" = 2.0\n").unwrap();
-        let e = r.recorder.validate(&c).unwrap_err();
+        let e = validate(&r.recorder, &c).unwrap_err();
         assert_eq!(e.key(), "recorder.view.max_hz.\"/camera/dept\"", "{e}");
         assert!(e.to_string().contains("no such topic"), "{e}");
         let r = parse(f, "[recorder.view.max_hz]\n\"/tf\" = -1.0\n").unwrap();
-        assert!(r.recorder.validate(&c).is_err());
+        assert!(validate(&r.recorder, &c).is_err());
         let e = parse(f, "[recorder]\nprofile = \"fast\"\n").unwrap_err();
         assert_eq!(e.key(), "recorder.profile", "{e}");
         let r = parse(f, "[recorder]\nflush_interval_s = 0.0\n").unwrap();
         assert_eq!(
-            r.recorder.validate(&c).unwrap_err().key(),
+            validate(&r.recorder, &c).unwrap_err().key(),
             "recorder.flush_interval_s"
         );
         let e = parse(f, "[recorder]\ncompression = \"gzip\"\n").unwrap_err();
@@ -1165,7 +1151,12 @@ mod tests {
         // No writer thread: the handle alone, so the ring's behaviour is exact.
         let (tx, _rx) = crossbeam::channel::bounded(4);
         let (wake, _wake_rx) = crossbeam::channel::bounded(1);
-        let shared = Arc::new(Shared::new(Overflow::Drop, 2, 1));
+        // An app's topic per converted kind (they come first in `Kind::ALL`).
+        const APP: [&str; 9] = [
+            "/d", "/det", "/ng", "/s", "/ts", "/m", "/dec", "/nav", "/neck",
+        ];
+        let topics = Kind::ALL.map(|k| k.own_topic().unwrap_or_else(|| APP[k as usize]));
+        let shared = Arc::new(Shared::new(topics, Overflow::Drop, 2, 1));
         let h = RecorderHandle {
             tx,
             wake,
@@ -1183,12 +1174,13 @@ mod tests {
             .collect();
         assert_eq!(kept, [5, 6]);
         assert_eq!(h.dropped(Kind::Depth), 4);
-        assert_eq!(h.drops().offered[schemas::topic::DEPTH], 6);
+        assert_eq!(h.drops().offered["/d"], 6);
         // Pooled kinds: one box in the pool; the second map finds none and is dropped, counted.
         let m = boxed_zeroed::<ObjectMap>();
         h.record_map(&m);
         h.record_map(&m);
         assert_eq!(h.dropped(Kind::Map), 1);
-        assert_eq!(h.drops().offered[schemas::topic::MAP], 2);
+        assert_eq!(h.drops().offered["/m"], 2);
+        assert_eq!(h.drops().offered[schemas::topic::LOG], 0);
     }
 }

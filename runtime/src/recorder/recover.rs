@@ -24,8 +24,8 @@
 //! [`segments`] lists a run's segments in order (stopping at the first missing index);
 //! [`super::inspect::info`] and [`super::inspect::export_csv`] read all of them as one run when
 //! given the first segment or the directory holding `trace.mcap`. Each segment is a complete
-//! MCAP on its own (schemas, channels, session metadata and `/truth/objects` repeated; channel
-//! sequence numbers and drop counts restart with each recorder instance).
+//! MCAP on its own (schemas, channels, session metadata and what the converter writes at start
+//! repeated; channel sequence numbers and drop counts restart with each recorder instance).
 
 use super::RecorderError;
 use mcap::records::{MessageHeader, Record};

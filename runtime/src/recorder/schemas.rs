@@ -1,51 +1,13 @@
-//! Topic names and the schema of every channel: Foxglove's protobuf schemas
-//! (`foxglove::messages::*`) and the ones `foxglove::Encode` derives for [`super::messages`].
-//! Every channel's message encoding is `protobuf`, its schema a `FileDescriptorSet`.
+//! Channels: a topic with its schema, the runtime's own topics and their schemas (Foxglove's
+//! `foxglove.Log` and the ones `foxglove::Encode` derives for [`super::messages`]). Every
+//! channel's message encoding is `protobuf`, its schema a `FileDescriptorSet`.
 
 use super::messages as own;
 use foxglove::messages as fg;
 use foxglove::{Encode, Schema};
 
-/// Topic names.
+/// The runtime's own topics (the app names the rest: its [`super::Converter::channels`]).
 pub mod topic {
-    /// Depth image (`foxglove.RawImage`, `16UC1`).
-    pub const DEPTH: &str = "/camera/depth";
-    /// Calibration of the depth image (`foxglove.CameraCalibration`).
-    pub const CALIBRATION: &str = "/camera/calibration";
-    /// The rest of each depth frame: header, intrinsics, camera pose.
-    pub const DEPTH_META: &str = "/camera/depth/meta";
-    /// Detection boxes drawn on the depth image (`foxglove.ImageAnnotations`).
-    pub const ANNOTATIONS: &str = "/camera/detections";
-    /// The detections, every field (for replay).
-    pub const DETECTIONS: &str = "/detections";
-    /// The estimated robot state, every field (for replay).
-    pub const STATE: &str = "/robot/state";
-    /// The navigation grid the planner plans on (for replay).
-    pub const NAV_GRID: &str = "/nav/grid";
-    /// Estimated transforms world→base→neck→camera.
-    pub const TF: &str = "/tf";
-    /// Estimated base trajectory.
-    pub const TRAJECTORY: &str = "/trajectory";
-    /// True transform world→base_true.
-    pub const TRUTH_TF: &str = "/truth/tf";
-    /// True base trajectory.
-    pub const TRUTH_TRAJECTORY: &str = "/truth/trajectory";
-    /// Ground-truth cuboids.
-    pub const TRUTH_OBJECTS: &str = "/truth/objects";
-    /// Estimated cuboids.
-    pub const MAP: &str = "/map/objects";
-    /// What each map consumed (frames, counts).
-    pub const MAP_META: &str = "/map/meta";
-    /// GBV candidate frusta and chosen view.
-    pub const GBV: &str = "/planner/gbv";
-    /// LBV candidate frusta and chosen view.
-    pub const LBV: &str = "/planner/lbv";
-    /// Every candidate with every F(v) term.
-    pub const DECISIONS: &str = "/planner/decisions";
-    /// Navigation goals.
-    pub const NAV_GOAL: &str = "/planner/nav_goal";
-    /// Neck goals.
-    pub const NECK_GOAL: &str = "/planner/neck_goal";
     /// Deadline-monitor events.
     pub const DEADLINE: &str = "/runtime/deadline";
     /// Node heartbeats with their per-input counts.
@@ -76,44 +38,30 @@ pub struct ChannelDef {
     pub encoding: String,
 }
 
-fn def<T: Encode>(topic: &'static str) -> ChannelDef {
-    ChannelDef {
-        topic,
-        // Every type here has a schema (the well-known ones and the derived ones).
-        schema: T::get_schema().unwrap_or_else(|| Schema::new("", "", Vec::new())),
-        encoding: T::get_message_encoding(),
+impl ChannelDef {
+    /// The channel of `topic` carrying `T` (a Foxglove well-known type or one deriving
+    /// `foxglove::Encode`).
+    pub fn of<T: Encode>(topic: &'static str) -> Self {
+        Self {
+            topic,
+            // Every type the recorder writes has a schema (the well-known ones and the derived
+            // ones).
+            schema: T::get_schema().unwrap_or_else(|| Schema::new("", "", Vec::new())),
+            encoding: T::get_message_encoding(),
+        }
     }
 }
 
-/// Every channel, in the order they are created.
-pub fn channels() -> Vec<ChannelDef> {
+/// The runtime's own channels, created after the app's ([`super::Converter::channels`]).
+pub fn own_channels() -> Vec<ChannelDef> {
     use topic::*;
     vec![
-        def::<fg::RawImage>(DEPTH),
-        def::<fg::CameraCalibration>(CALIBRATION),
-        def::<own::DepthMeta>(DEPTH_META),
-        def::<fg::ImageAnnotations>(ANNOTATIONS),
-        def::<own::DetectionsRaw>(DETECTIONS),
-        def::<own::RobotStateRaw>(STATE),
-        def::<own::OccupancyGridRaw>(NAV_GRID),
-        def::<fg::FrameTransforms>(TF),
-        def::<fg::PosesInFrame>(TRAJECTORY),
-        def::<fg::FrameTransforms>(TRUTH_TF),
-        def::<fg::PosesInFrame>(TRUTH_TRAJECTORY),
-        def::<fg::SceneUpdate>(TRUTH_OBJECTS),
-        def::<fg::SceneUpdate>(MAP),
-        def::<own::MapMeta>(MAP_META),
-        def::<fg::SceneUpdate>(GBV),
-        def::<fg::SceneUpdate>(LBV),
-        def::<own::PlannerDecision>(DECISIONS),
-        def::<own::NavGoal>(NAV_GOAL),
-        def::<own::NeckGoal>(NECK_GOAL),
-        def::<own::DeadlineEvent>(DEADLINE),
-        def::<own::NodeHealth>(HEALTH),
-        def::<own::LatencySummary>(LATENCY),
-        def::<fg::Log>(LOG),
-        def::<own::Metrics>(METRICS),
-        def::<own::RecorderStats>(STATS),
+        ChannelDef::of::<own::DeadlineEvent>(DEADLINE),
+        ChannelDef::of::<own::NodeHealth>(HEALTH),
+        ChannelDef::of::<own::LatencySummary>(LATENCY),
+        ChannelDef::of::<fg::Log>(LOG),
+        ChannelDef::of::<own::Metrics>(METRICS),
+        ChannelDef::of::<own::RecorderStats>(STATS),
     ]
 }
 

@@ -1,18 +1,19 @@
-//! The writer thread: owns the `mcap::Writer`, converts and encodes messages, applies the
-//! profile's rate limits, bounds chunk age, writes stats, feeds the live view.
+//! The writer thread: owns the `mcap::Writer` (in the [`Sink`]), has the app's [`Converter`]
+//! convert its inputs and converts the runtime's own, encodes, applies the profile's rate limits,
+//! bounds chunk age, writes stats, feeds the live view.
 
-use super::convert;
+use super::convert::{self, Converter};
 use super::live::LiveView;
 use super::messages::{RecorderStats, TopicCounts};
-use super::schemas::{self, SESSION_METADATA, STATS_METADATA, topic};
+use super::schemas::{ChannelDef, SESSION_METADATA, STATS_METADATA, topic};
 use super::{
-    Compression, DropCounts, MountGeometry, Msg, RecorderConfig, RecorderError, RecorderSetup,
-    RecorderSummary, Shared, WriterHook,
+    Compression, DropCounts, Msg, RecorderConfig, RecorderError, RecorderSetup, RecorderSummary,
+    Shared, WriterHook,
 };
 use crossbeam::channel::{Receiver, TryRecvError};
 use foxglove::Encode;
 use mcap::records::{MessageHeader, Metadata};
-use shm_types::{DepthFrame, RobotState, decision_kind};
+use shm_types::DepthFrame;
 use std::collections::{BTreeMap, HashMap};
 use std::fs::File;
 use std::io::{BufWriter, Write};
@@ -52,71 +53,38 @@ impl Chan {
     }
 }
 
-/// A base trajectory being accumulated.
-#[derive(Debug, Default)]
-struct Trajectory {
-    poses: Vec<[f32; 3]>,
-    last_sent_ns: Option<u64>,
-}
-
-impl Trajectory {
-    /// Add a pose; returns true when a message is due.
-    fn add(&mut self, s: &RobotState, period_ns: u64, max: usize) -> bool {
-        let p = s.base_pose;
-        let moved = self
-            .poses
-            .last()
-            .is_none_or(|q| (q[0] - p[0]).hypot(q[1] - p[1]) > 0.01 || (q[2] - p[2]).abs() > 0.02);
-        if moved {
-            if self.poses.len() >= max {
-                // Thin the older half by 2 so memory and message size stay bounded.
-                let mut k = 0;
-                self.poses.retain(|_| {
-                    k += 1;
-                    k % 2 == 1
-                });
-            }
-            self.poses.push(p);
-        }
-        let t = s.header.sim_time_ns;
-        let due = self
-            .last_sent_ns
-            .is_none_or(|l| t >= l.saturating_add(period_ns) || t < l);
-        if due {
-            self.last_sent_ns = Some(t);
-        }
-        due
-    }
-}
-
-/// The writer thread's state.
-pub(super) struct WriterState {
+/// Where messages go: the file's channels, the MCAP writer and the live view. A [`Converter`]
+/// writes through it ([`Sink::emit`]) on the writer thread.
+pub struct Sink {
     path: PathBuf,
     mcap: mcap::Writer<BufWriter<File>>,
     chans: Vec<Chan>,
     index: HashMap<&'static str, usize>,
-    mount: MountGeometry,
-    cfg: RecorderConfig,
     out: Vec<u8>,
-    decimation: u32,
     live: Option<LiveView>,
     /// Messages the live view gets again every stats interval (written once: truth, grid).
     live_static: Vec<(usize, u64, Vec<u8>)>,
     chunk_open_since: Option<Instant>,
-    last_stats: Instant,
     last_log_ns: u64,
-    traj: Trajectory,
-    truth_traj: Trajectory,
-    /// For tests: called before each message is written.
-    hook: Option<WriterHook>,
 }
 
-impl std::fmt::Debug for WriterState {
+impl std::fmt::Debug for Sink {
     fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
-        f.debug_struct("WriterState")
+        f.debug_struct("Sink")
             .field("path", &self.path)
             .finish_non_exhaustive()
     }
+}
+
+/// The writer thread's state.
+#[derive(Debug)]
+pub(super) struct WriterState {
+    sink: Sink,
+    conv: Box<dyn Converter>,
+    cfg: RecorderConfig,
+    last_stats: Instant,
+    /// For tests: called before each message is written.
+    hook: Option<WriterHook>,
 }
 
 /// CPU time of the calling thread, ns, from `/proc/thread-self/schedstat` (0 if unavailable).
@@ -126,127 +94,7 @@ pub(crate) fn thread_cpu_ns() -> u64 {
         .map_or(0, |r| r.cpu_ns)
 }
 
-impl WriterState {
-    pub(super) fn open(
-        path: &Path,
-        cfg: &RecorderConfig,
-        setup: &RecorderSetup,
-    ) -> Result<Self, RecorderError> {
-        let file = File::create(path).map_err(|source| RecorderError::Create {
-            path: path.to_path_buf(),
-            source,
-        })?;
-        let mcap_err = |source| RecorderError::Mcap {
-            path: path.to_path_buf(),
-            source,
-        };
-        let mut opts = mcap::WriteOptions::new()
-            .profile("")
-            .library(format!("vpsom-rt {}", env!("CARGO_PKG_VERSION")))
-            .chunk_size(Some(cfg.chunk_size_kb * 1024))
-            .compression(match cfg.compression {
-                Compression::Zstd => Some(mcap::Compression::Zstd),
-                Compression::Lz4 => Some(mcap::Compression::Lz4),
-                Compression::None => None,
-            })
-            .compression_level(cfg.compression_level)
-            // The writer thread compresses alone: no zstd worker threads competing with nodes.
-            .compression_threads(0);
-        if cfg.compression == Compression::None {
-            opts = opts.compression_level(0);
-        }
-        let mut mcap = opts
-            .create(BufWriter::with_capacity(1 << 20, file))
-            .map_err(mcap_err)?;
-        let mut chans = Vec::new();
-        let mut index = HashMap::new();
-        let defs = schemas::channels();
-        let mut schema_ids: HashMap<String, u16> = HashMap::new();
-        for d in &defs {
-            let sid = match schema_ids.get(&d.schema.name) {
-                Some(&sid) => sid,
-                None => {
-                    let sid = mcap
-                        .add_schema(&d.schema.name, &d.schema.encoding, &d.schema.data)
-                        .map_err(mcap_err)?;
-                    schema_ids.insert(d.schema.name.clone(), sid);
-                    sid
-                }
-            };
-            let id = mcap
-                .add_channel(sid, d.topic, &d.encoding, &BTreeMap::new())
-                .map_err(mcap_err)?;
-            index.insert(d.topic, chans.len());
-            chans.push(Chan {
-                topic: d.topic,
-                id,
-                seq: 0,
-                written: 0,
-                throttled: 0,
-                min_period_ns: cfg.max_hz(d.topic).map(|hz| {
-                    if hz > 0.0 {
-                        (1e9 / hz).round() as u64
-                    } else {
-                        u64::MAX
-                    }
-                }),
-                last_ns: None,
-            });
-        }
-        let live = match setup.live_port {
-            Some(port) => Some(LiveView::start(port, &defs)?),
-            None => None,
-        };
-        let m = setup.mount;
-        let session = Metadata {
-            name: SESSION_METADATA.into(),
-            metadata: BTreeMap::from([
-                ("scene".to_string(), setup.scene.clone()),
-                ("mount_height_m".to_string(), m.height.to_string()),
-                (
-                    "mount_forward_offset_m".to_string(),
-                    m.forward_offset.to_string(),
-                ),
-                ("hfov_deg".to_string(), m.hfov_deg.to_string()),
-                ("vfov_deg".to_string(), m.vfov_deg.to_string()),
-                ("profile".to_string(), cfg.profile.name().to_string()),
-                (
-                    "depth_decimation".to_string(),
-                    cfg.depth_decimation().to_string(),
-                ),
-                ("truth_objects".to_string(), setup.truth.len().to_string()),
-                ("host".to_string(), setup.host.clone()),
-                ("overflow".to_string(), setup.overflow.name().to_string()),
-            ]),
-        };
-        mcap.write_metadata(&session).map_err(mcap_err)?;
-        let mut w = WriterState {
-            path: path.to_path_buf(),
-            mcap,
-            chans,
-            index,
-            mount: setup.mount,
-            cfg: cfg.clone(),
-            out: Vec::with_capacity(1 << 16),
-            decimation: cfg.depth_decimation(),
-            live,
-            live_static: Vec::new(),
-            chunk_open_since: None,
-            last_stats: Instant::now(),
-            last_log_ns: 0,
-            traj: Trajectory::default(),
-            truth_traj: Trajectory::default(),
-            hook: setup.writer_hook.clone(),
-        };
-        if !setup.truth.is_empty() {
-            w.emit(topic::TRUTH_OBJECTS, 0, 0, || {
-                convert::truth_objects(&setup.truth)
-            })?;
-            w.keep_for_live(topic::TRUTH_OBJECTS, 0);
-        }
-        Ok(w)
-    }
-
+impl Sink {
     fn err(&self, source: mcap::McapError) -> RecorderError {
         RecorderError::Mcap {
             path: self.path.clone(),
@@ -254,14 +102,10 @@ impl WriterState {
         }
     }
 
-    /// The live view's port, if one is served.
-    pub(super) fn live_port(&self) -> Option<u16> {
-        self.live.as_ref().map(LiveView::port)
-    }
-
-    /// If `topic`'s rate limit admits a message at `log_ns`, build it with `f`, encode it, write
-    /// it and publish it live.
-    fn emit<T: Encode>(
+    /// If `topic`'s rate limit admits a message at `log_ns` (simulated/robot time; `publish_ns`
+    /// is the monotonic stamp), build it with `f`, encode it, write it and publish it live. A
+    /// topic that is not a channel of the file is ignored. `Err` is an I/O error of the file.
+    pub fn emit<T: Encode>(
         &mut self,
         topic: &'static str,
         log_ns: u64,
@@ -298,14 +142,136 @@ impl WriterState {
         Ok(())
     }
 
-    /// Remember the message just emitted on `topic` to publish it live again later.
-    fn keep_for_live(&mut self, topic: &'static str, log_ns: u64) {
+    /// Publish the message just emitted on `topic` live again every stats interval (for what is
+    /// written once or rarely, such as a scene's ground truth or a map of the building), so a
+    /// viewer that connects later sees it too.
+    pub fn keep_for_live(&mut self, topic: &'static str, log_ns: u64) {
         if self.live.is_some()
             && let Some(&i) = self.index.get(topic)
         {
             self.live_static.retain(|(j, _, _)| *j != i);
             self.live_static.push((i, log_ns, self.out.clone()));
         }
+    }
+
+    fn written(&self) -> BTreeMap<&'static str, u64> {
+        self.chans.iter().map(|c| (c.topic, c.written)).collect()
+    }
+}
+
+impl WriterState {
+    /// Open `path` and write the header, schemas, channels (`defs`: the converter's, then the
+    /// runtime's own), the session metadata and what the converter writes at start.
+    pub(super) fn open(
+        path: &Path,
+        cfg: &RecorderConfig,
+        setup: RecorderSetup,
+        defs: &[ChannelDef],
+    ) -> Result<Self, RecorderError> {
+        let file = File::create(path).map_err(|source| RecorderError::Create {
+            path: path.to_path_buf(),
+            source,
+        })?;
+        let mcap_err = |source| RecorderError::Mcap {
+            path: path.to_path_buf(),
+            source,
+        };
+        let mut opts = mcap::WriteOptions::new()
+            .profile("")
+            .library(format!("vpsom-rt {}", env!("CARGO_PKG_VERSION")))
+            .chunk_size(Some(cfg.chunk_size_kb * 1024))
+            .compression(match cfg.compression {
+                Compression::Zstd => Some(mcap::Compression::Zstd),
+                Compression::Lz4 => Some(mcap::Compression::Lz4),
+                Compression::None => None,
+            })
+            .compression_level(cfg.compression_level)
+            // The writer thread compresses alone: no zstd worker threads competing with nodes.
+            .compression_threads(0);
+        if cfg.compression == Compression::None {
+            opts = opts.compression_level(0);
+        }
+        let mut mcap = opts
+            .create(BufWriter::with_capacity(1 << 20, file))
+            .map_err(mcap_err)?;
+        let mut chans = Vec::new();
+        let mut index = HashMap::new();
+        let mut schema_ids: HashMap<String, u16> = HashMap::new();
+        for d in defs {
+            let sid = match schema_ids.get(&d.schema.name) {
+                Some(&sid) => sid,
+                None => {
+                    let sid = mcap
+                        .add_schema(&d.schema.name, &d.schema.encoding, &d.schema.data)
+                        .map_err(mcap_err)?;
+                    schema_ids.insert(d.schema.name.clone(), sid);
+                    sid
+                }
+            };
+            let id = mcap
+                .add_channel(sid, d.topic, &d.encoding, &BTreeMap::new())
+                .map_err(mcap_err)?;
+            index.insert(d.topic, chans.len());
+            chans.push(Chan {
+                topic: d.topic,
+                id,
+                seq: 0,
+                written: 0,
+                throttled: 0,
+                min_period_ns: cfg.max_hz(d.topic).map(|hz| {
+                    if hz > 0.0 {
+                        (1e9 / hz).round() as u64
+                    } else {
+                        u64::MAX
+                    }
+                }),
+                last_ns: None,
+            });
+        }
+        let live = match setup.live_port {
+            Some(port) => Some(LiveView::start(port, defs)?),
+            None => None,
+        };
+        let mut metadata = BTreeMap::from([
+            ("scene".to_string(), setup.scene.clone()),
+            ("profile".to_string(), cfg.profile.name().to_string()),
+            (
+                "depth_decimation".to_string(),
+                cfg.depth_decimation().to_string(),
+            ),
+            ("host".to_string(), setup.host.clone()),
+            ("overflow".to_string(), setup.overflow.name().to_string()),
+        ]);
+        metadata.extend(setup.converter.session_metadata());
+        let session = Metadata {
+            name: SESSION_METADATA.into(),
+            metadata,
+        };
+        mcap.write_metadata(&session).map_err(mcap_err)?;
+        let mut w = WriterState {
+            sink: Sink {
+                path: path.to_path_buf(),
+                mcap,
+                chans,
+                index,
+                out: Vec::with_capacity(1 << 16),
+                live,
+                live_static: Vec::new(),
+                chunk_open_since: None,
+                last_log_ns: 0,
+            },
+            conv: setup.converter,
+            cfg: cfg.clone(),
+            last_stats: Instant::now(),
+            hook: setup.writer_hook,
+        };
+        w.conv.start(&mut w.sink)?;
+        Ok(w)
+    }
+
+    /// The live view's port, if one is served.
+    pub(super) fn live_port(&self) -> Option<u16> {
+        self.sink.live.as_ref().map(LiveView::port)
     }
 
     /// Call the test hook, if any, before a message is written.
@@ -319,75 +285,39 @@ impl WriterState {
         if !matches!(m, Msg::Finish) {
             self.before_write();
         }
-        let mount = self.mount;
+        let (conv, sink) = (&mut self.conv, &mut self.sink);
         match m {
             Msg::Finish => {}
-            Msg::State(s) | Msg::TrueState(s) => {
-                let truth = matches!(m, Msg::TrueState(_));
-                let (t, p) = (s.header.sim_time_ns, s.header.stamp_ns);
-                if !truth {
-                    self.emit(topic::STATE, t, p, || convert::state_raw(&s))?;
-                }
-                let tf_topic = if truth { topic::TRUTH_TF } else { topic::TF };
-                self.emit(tf_topic, t, p, || convert::transforms(&s, &mount, truth))?;
-                self.trajectory(&s, truth)?;
-            }
+            Msg::State(s) => conv.state(&s, sink)?,
+            Msg::TrueState(s) => conv.true_state(&s, sink)?,
             Msg::Detections(b) => {
-                let (t, p) = (b.header.sim_time_ns, b.header.stamp_ns);
-                let k = self.decimation;
-                let r = self
-                    .emit(topic::DETECTIONS, t, p, || convert::detections_raw(&b))
-                    .and_then(|()| {
-                        self.emit(topic::ANNOTATIONS, t, p, || convert::annotations(&b, t, k))
-                    });
+                let r = conv.detections(&b, sink);
                 shared.detections_pool.give(b);
                 r?;
             }
-            Msg::NavGrid(g) => {
-                let (t, p) = (g.header.sim_time_ns, g.header.stamp_ns);
-                self.emit(topic::NAV_GRID, t, p, || convert::grid_raw(&g))?;
-                self.keep_for_live(topic::NAV_GRID, t);
-            }
+            Msg::NavGrid(g) => conv.nav_grid(&g, sink)?,
             Msg::Map(b) => {
-                let (t, p) = (b.header.sim_time_ns, b.header.stamp_ns);
-                let r = self
-                    .emit(topic::MAP, t, p, || convert::map_objects(&b))
-                    .and_then(|()| self.emit(topic::MAP_META, t, p, || convert::map_meta(&b)));
+                let r = conv.map(&b, sink);
                 shared.map_pool.give(b);
                 r?;
             }
             Msg::Decision(b) => {
-                let (t, p) = (b.header.sim_time_ns, b.header.stamp_ns);
-                let len = self.cfg.frustum_length_m;
-                let scene = if b.kind == decision_kind::GBV {
-                    topic::GBV
-                } else {
-                    topic::LBV
-                };
-                let r = self
-                    .emit(topic::DECISIONS, t, p, || convert::decision(&b))
-                    .and_then(|()| self.emit(scene, t, p, || convert::frusta(&b, &mount, len)));
+                let r = conv.decision(&b, sink);
                 shared.decision_pool.give(b);
                 r?;
             }
-            Msg::NavGoal(g) => {
-                let (t, p) = (g.header.sim_time_ns, g.header.stamp_ns);
-                self.emit(topic::NAV_GOAL, t, p, || convert::nav_goal(&g))?;
-            }
-            Msg::NeckGoal(g) => {
-                let (t, p) = (g.header.sim_time_ns, g.header.stamp_ns);
-                self.emit(topic::NECK_GOAL, t, p, || convert::neck_goal(&g))?;
-            }
+            Msg::NavGoal(g) => conv.nav_goal(&g, sink)?,
+            Msg::NeckGoal(g) => conv.neck_goal(&g, sink)?,
             Msg::Deadline(e) => {
                 let (t, p) = (e.header.sim_time_ns, e.header.stamp_ns);
-                self.emit(topic::DEADLINE, t, p, || convert::deadline(&e))?;
+                sink.emit(topic::DEADLINE, t, p, || convert::deadline(&e))?;
             }
             Msg::Health(h) => {
                 let (t, p) = (h.header.sim_time_ns, h.header.stamp_ns);
-                self.emit(topic::HEALTH, t, p, || convert::health(&h))?;
+                sink.emit(topic::HEALTH, t, p, || convert::health(&h))?;
             }
             Msg::Latency(s) => {
-                self.emit(topic::LATENCY, s.time_ns, s.time_ns, || {
+                sink.emit(topic::LATENCY, s.time_ns, s.time_ns, || {
                     convert::latency(&s)
                 })?;
             }
@@ -397,12 +327,12 @@ impl WriterState {
                 name,
                 text,
             } => {
-                self.emit(topic::LOG, time_ns, time_ns, || {
+                sink.emit(topic::LOG, time_ns, time_ns, || {
                     convert::log(time_ns, level, &name, &text)
                 })?;
             }
             Msg::Metrics { time_ns, value } => {
-                self.emit(topic::METRICS, time_ns, time_ns, || {
+                sink.emit(topic::METRICS, time_ns, time_ns, || {
                     convert::metrics(&value)
                 })?;
             }
@@ -410,44 +340,14 @@ impl WriterState {
         Ok(())
     }
 
-    /// Add a state to its trajectory and write the trajectory when due.
-    fn trajectory(&mut self, s: &RobotState, truth: bool) -> Result<(), RecorderError> {
-        let (t, p) = (s.header.sim_time_ns, s.header.stamp_ns);
-        let period = (1e9 / self.cfg.trajectory_hz) as u64;
-        let max = self.cfg.trajectory_max_poses;
-        let (tr, traj_topic) = if truth {
-            (&mut self.truth_traj, topic::TRUTH_TRAJECTORY)
-        } else {
-            (&mut self.traj, topic::TRAJECTORY)
-        };
-        if !tr.add(s, period, max) {
-            return Ok(());
-        }
-        let poses = std::mem::take(&mut tr.poses);
-        let r = self.emit(traj_topic, t, p, || convert::trajectory(t, &poses));
-        if truth {
-            self.truth_traj.poses = poses;
-        } else {
-            self.traj.poses = poses;
-        }
-        r
-    }
-
     fn depth(&mut self, f: &DepthFrame) -> Result<(), RecorderError> {
         self.before_write();
-        let k = self.decimation;
-        let (t, p) = (f.header.sim_time_ns, f.header.stamp_ns);
-        self.emit(topic::DEPTH, t, p, || convert::depth_image(f, k))?;
-        self.emit(topic::DEPTH_META, t, p, || convert::depth_meta(f, k))?;
-        self.emit(topic::CALIBRATION, t, p, || convert::calibration(f, k))
-    }
-
-    fn written(&self) -> BTreeMap<&'static str, u64> {
-        self.chans.iter().map(|c| (c.topic, c.written)).collect()
+        self.conv.depth(f, &mut self.sink)
     }
 
     fn throttled(&self) -> BTreeMap<String, u64> {
-        self.chans
+        self.sink
+            .chans
             .iter()
             .filter(|c| c.min_period_ns.is_some())
             .map(|c| (c.topic.to_string(), c.throttled))
@@ -456,6 +356,7 @@ impl WriterState {
 
     fn stats(&mut self, drops: &DropCounts, last: bool) -> Result<(), RecorderError> {
         let topics = self
+            .sink
             .chans
             .iter()
             .map(|c| TopicCounts {
@@ -471,11 +372,11 @@ impl WriterState {
             profile: self.cfg.profile.name().to_string(),
             topics,
             dropped_total: drops.total_dropped(),
-            throttled_total: self.chans.iter().map(|c| c.throttled).sum(),
+            throttled_total: self.sink.chans.iter().map(|c| c.throttled).sum(),
             last,
         };
-        let t = self.last_log_ns;
-        self.emit(topic::STATS, t, t, || msg)
+        let t = self.sink.last_log_ns;
+        self.sink.emit(topic::STATS, t, t, || msg)
     }
 
     /// Flush a chunk that is older than the interval; write stats when due.
@@ -484,19 +385,19 @@ impl WriterState {
         if self.last_stats.elapsed().as_secs_f64() >= self.cfg.stats_interval_s {
             self.last_stats = now;
             self.stats(&shared.drop_counts(), false)?;
-            if let Some(l) = &self.live {
-                for (i, t, data) in &self.live_static {
+            if let Some(l) = &self.sink.live {
+                for (i, t, data) in &self.sink.live_static {
                     l.publish(*i, *t, data);
                 }
             }
         }
-        if let Some(since) = self.chunk_open_since
+        if let Some(since) = self.sink.chunk_open_since
             && now.duration_since(since).as_secs_f64() >= self.cfg.flush_interval_s
         {
-            if let Err(e) = self.mcap.flush() {
-                return Err(self.err(e));
+            if let Err(e) = self.sink.mcap.flush() {
+                return Err(self.sink.err(e));
             }
-            self.chunk_open_since = None;
+            self.sink.chunk_open_since = None;
         }
         Ok(())
     }
@@ -504,12 +405,11 @@ impl WriterState {
     /// Time until the next tick is due.
     fn next_tick(&self) -> Duration {
         let stats = self.cfg.stats_interval_s - self.last_stats.elapsed().as_secs_f64();
-        let flush = self.chunk_open_since.map_or(f64::INFINITY, |s| {
+        let flush = self.sink.chunk_open_since.map_or(f64::INFINITY, |s| {
             self.cfg.flush_interval_s - s.elapsed().as_secs_f64()
         });
         Duration::from_secs_f64(stats.min(flush).clamp(0.001, 1.0))
     }
-
     /// The thread body: serve the channel (all of it before each depth frame), tick, finish.
     pub(super) fn run(
         mut self,
@@ -575,7 +475,7 @@ impl WriterState {
         for (t, n) in &drops.throttled {
             meta.insert(format!("throttled:{t}"), n.to_string());
         }
-        for (t, n) in self.written() {
+        for (t, n) in self.sink.written() {
             meta.insert(format!("written:{t}"), n.to_string());
         }
         meta.insert("dropped_total".into(), drops.total_dropped().to_string());
@@ -588,22 +488,23 @@ impl WriterState {
             name: STATS_METADATA.into(),
             metadata: meta,
         };
-        if let Err(e) = self.mcap.write_metadata(&md) {
-            return Err(self.err(e));
+        if let Err(e) = self.sink.mcap.write_metadata(&md) {
+            return Err(self.sink.err(e));
         }
-        if let Err(e) = self.mcap.finish() {
-            return Err(self.err(e));
+        if let Err(e) = self.sink.mcap.finish() {
+            return Err(self.sink.err(e));
         }
         let written = self
+            .sink
             .written()
             .into_iter()
             .map(|(t, n)| (t.to_string(), n))
             .collect();
         let cpu = thread_cpu_ns();
-        let path = self.path.clone();
+        let path = self.sink.path.clone();
         // Stop serving before the file is closed: viewers see the run end with the file.
-        drop(self.live.take());
-        let mut file = self.mcap.into_inner();
+        drop(self.sink.live.take());
+        let mut file = self.sink.mcap.into_inner();
         file.flush()
             .and_then(|()| file.get_ref().sync_all())
             .map_err(|source| RecorderError::Mcap {

@@ -1,14 +1,136 @@
-//! Shared helpers of the recorder tests: message builders and a reader of every message,
-//! decoded through the protobuf schema stored in the file.
+//! Shared helpers of the recorder tests: message builders, a test [`Converter`] (one message per
+//! input on topics named as the app's) and a reader of every message, decoded through the
+//! protobuf schema stored in the file. `nodes/vpsom/tests/recorder_*.rs` use them too (with the
+//! app's converter).
 
 #![allow(dead_code)]
 
+use foxglove::bytes::Bytes;
+use foxglove::messages::{Log, RawImage};
+use runtime::recorder::convert::time;
 use runtime::recorder::decode::MessageType;
 use runtime::recorder::inspect::{Item, ScanEnd, scan};
+use runtime::recorder::schemas::ChannelDef;
+use runtime::recorder::{Converter, Kind, RecorderError, RecorderSetup, Sink};
 use serde_json::Value;
 use shm_types::*;
 use std::collections::{BTreeMap, HashMap};
 use std::path::Path;
+
+/// Topics of [`TestConverter`] (named as the app's primary topics), and the runtime's own.
+pub mod topic {
+    #[allow(unused_imports)]
+    pub use runtime::recorder::schemas::topic::*;
+    /// Depth frames (`foxglove.RawImage`).
+    pub const DEPTH: &str = "/camera/depth";
+    /// Detections.
+    pub const DETECTIONS: &str = "/detections";
+    /// Navigation grids.
+    pub const NAV_GRID: &str = "/nav/grid";
+    /// Estimated states.
+    pub const TF: &str = "/tf";
+    /// True states.
+    pub const TRUTH_TF: &str = "/truth/tf";
+    /// Maps.
+    pub const MAP: &str = "/map/objects";
+    /// Decisions.
+    pub const DECISIONS: &str = "/planner/decisions";
+    /// Navigation goals.
+    pub const NAV_GOAL: &str = "/planner/nav_goal";
+    /// Neck goals.
+    pub const NECK_GOAL: &str = "/planner/neck_goal";
+}
+
+/// An app's converter for the runtime's tests: a depth frame becomes its raw image (every
+/// pixel), any other input one `foxglove.Log` naming it, on its kind's topic.
+#[derive(Debug)]
+pub struct TestConverter;
+
+/// A setup with [`TestConverter`] and the defaults of [`RecorderSetup::new`].
+pub fn test_setup() -> RecorderSetup {
+    RecorderSetup::new(TestConverter)
+}
+
+fn note(sink: &mut Sink, topic: &'static str, h: &Header, what: &str) -> Result<(), RecorderError> {
+    sink.emit(topic, h.sim_time_ns, h.stamp_ns, || Log {
+        timestamp: Some(time(h.sim_time_ns)),
+        level: 2,
+        message: format!("{what} {}", h.seq),
+        name: "test".into(),
+        file: String::new(),
+        line: 0,
+    })
+}
+
+impl Converter for TestConverter {
+    fn channels(&self) -> Vec<ChannelDef> {
+        use topic::*;
+        let mut c = vec![ChannelDef::of::<RawImage>(DEPTH)];
+        for t in [
+            DETECTIONS, NAV_GRID, TF, TRUTH_TF, MAP, DECISIONS, NAV_GOAL, NECK_GOAL,
+        ] {
+            c.push(ChannelDef::of::<Log>(t));
+        }
+        c
+    }
+
+    fn topic(&self, kind: Kind) -> &'static str {
+        use topic::*;
+        match kind {
+            Kind::Depth => DEPTH,
+            Kind::Detections => DETECTIONS,
+            Kind::NavGrid => NAV_GRID,
+            Kind::State => TF,
+            Kind::TrueState => TRUTH_TF,
+            Kind::Map => MAP,
+            Kind::Decision => DECISIONS,
+            Kind::NavGoal => NAV_GOAL,
+            _ => NECK_GOAL,
+        }
+    }
+
+    fn depth(&mut self, f: &DepthFrame, sink: &mut Sink) -> Result<(), RecorderError> {
+        let h = &f.header;
+        sink.emit(topic::DEPTH, h.sim_time_ns, h.stamp_ns, || RawImage {
+            timestamp: Some(time(h.sim_time_ns)),
+            frame_id: "camera".into(),
+            width: f.width,
+            height: f.height,
+            encoding: "16UC1".into(),
+            step: f.width * 2,
+            data: Bytes::from(
+                f.pixels()
+                    .iter()
+                    .flat_map(|p| p.to_le_bytes())
+                    .collect::<Vec<u8>>(),
+            ),
+        })
+    }
+    fn detections(&mut self, d: &Detections, sink: &mut Sink) -> Result<(), RecorderError> {
+        note(sink, topic::DETECTIONS, &d.header, "detections")
+    }
+    fn nav_grid(&mut self, g: &OccupancyGrid, sink: &mut Sink) -> Result<(), RecorderError> {
+        note(sink, topic::NAV_GRID, &g.header, "grid")
+    }
+    fn state(&mut self, s: &RobotState, sink: &mut Sink) -> Result<(), RecorderError> {
+        note(sink, topic::TF, &s.header, "state")
+    }
+    fn true_state(&mut self, s: &RobotState, sink: &mut Sink) -> Result<(), RecorderError> {
+        note(sink, topic::TRUTH_TF, &s.header, "true state")
+    }
+    fn map(&mut self, m: &ObjectMap, sink: &mut Sink) -> Result<(), RecorderError> {
+        note(sink, topic::MAP, &m.header, "map")
+    }
+    fn decision(&mut self, d: &PlannerDecision, sink: &mut Sink) -> Result<(), RecorderError> {
+        note(sink, topic::DECISIONS, &d.header, "decision")
+    }
+    fn nav_goal(&mut self, g: &NavGoal, sink: &mut Sink) -> Result<(), RecorderError> {
+        note(sink, topic::NAV_GOAL, &g.header, "nav goal")
+    }
+    fn neck_goal(&mut self, g: &NeckGoal, sink: &mut Sink) -> Result<(), RecorderError> {
+        note(sink, topic::NECK_GOAL, &g.header, "neck goal")
+    }
+}
 
 pub fn header(seq: u64) -> Header {
     Header {
@@ -223,7 +345,16 @@ pub fn python_check(path: &Path, expect: &BTreeMap<String, u64>) {
         "precondition: VPSOM_PYTHON must name a python with the `mcap` and \
          `mcap-protobuf-support` packages (.ci/run makes target/ci-venv)",
     );
-    let script = Path::new(env!("CARGO_MANIFEST_DIR")).join("tests/py/check_mcap.py");
+    // In the runtime's tests and, through `#[path]`, the app's.
+    let script = Path::new(env!("CARGO_MANIFEST_DIR"))
+        .join("tests/py/check_mcap.py")
+        .canonicalize()
+        .or_else(|_| {
+            Path::new(env!("CARGO_MANIFEST_DIR"))
+                .join("../../runtime/tests/py/check_mcap.py")
+                .canonicalize()
+        })
+        .expect("runtime/tests/py/check_mcap.py");
     let mut cmd = std::process::Command::new(py);
     cmd.arg(&script).arg(path);
     for (t, n) in expect {

@@ -48,7 +48,7 @@ pub struct SceneGenConfig {
 impl Default for SceneGenConfig {
     /// The `[scenegen]` section of the built-in `config/default.toml`.
     fn default() -> Self {
-        settings::DEFAULTS.section("scenegen")
+        crate::DEFAULTS.section("scenegen")
     }
 }
 

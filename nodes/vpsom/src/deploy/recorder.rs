@@ -5,12 +5,11 @@ use super::RunArgs;
 use super::health::report_input;
 use super::host::{self, Flow, HostError, NodeHost, Pace};
 use crate::config::Config;
+use crate::recording::{MountGeometry, SceneConverter, TruthBox};
 use crate::sim::Scene;
 use crate::topics;
 use runtime::ports::{PortContext, Subscriber};
-use runtime::recorder::{
-    MountGeometry, Overflow, Recorder, RecorderHandle, RecorderSetup, TruthBox,
-};
+use runtime::recorder::{Overflow, Recorder, RecorderHandle, RecorderSetup};
 use shm_types::{
     DeadlineEvent, DepthFrame, Detections, NavGoal, NeckGoal, NodeHealth, ObjectMap, OccupancyGrid,
     PlannerDecision, RobotState,
@@ -31,37 +30,35 @@ pub fn recorder_node(args: &RunArgs, cfg: &Config) -> Result<(), HostError> {
     Ok(())
 }
 
-/// What the recorder needs to draw: the scene's true cuboids and the camera geometry (host
-/// `live`: the lockstep host overrides it).
+/// What the recorder needs to draw: the scene's true cuboids and the camera geometry, in the
+/// app's converter (host `live`: the lockstep host overrides it).
 pub fn recorder_setup(scene: &Scene, cfg: &Config) -> RecorderSetup {
+    let truth = scene
+        .objects
+        .iter()
+        .map(|o| TruthBox {
+            name: o.name.clone(),
+            class: o.class.clone(),
+            center: o.center.to_array(),
+            size: o.size.to_array(),
+            yaw: o.yaw,
+        })
+        .collect();
     RecorderSetup {
         scene: scene.name.clone(),
-        mount: mount(cfg),
-        truth: scene
-            .objects
-            .iter()
-            .map(|o| TruthBox {
-                name: o.name.clone(),
-                class: o.class.clone(),
-                center: o.center.to_array(),
-                size: o.size.to_array(),
-                yaw: o.yaw,
-            })
-            .collect(),
-        live_port: None,
-        host: "live".into(),
-        // A live recorder never makes a real-time publisher wait: it drops and counts.
-        overflow: Overflow::Drop,
-        writer_hook: None,
+        ..live_setup(cfg, truth)
     }
 }
 
-fn mount(cfg: &Config) -> MountGeometry {
-    MountGeometry {
-        height: cfg.camera.mount.height,
-        forward_offset: cfg.camera.mount.forward_offset,
-        hfov_deg: cfg.camera.hfov_deg,
-        vfov_deg: cfg.camera.vfov_deg,
+/// A live host's setup: the camera of `cfg`, `truth` (empty: nothing true to draw), host
+/// `live`, and drops rather than waits.
+fn live_setup(cfg: &Config, truth: Vec<TruthBox>) -> RecorderSetup {
+    let conv = SceneConverter::new(&cfg.recorder, MountGeometry::from(&cfg.camera), truth);
+    RecorderSetup {
+        host: "live".into(),
+        // A live recorder never makes a real-time publisher wait: it drops and counts.
+        overflow: Overflow::Drop,
+        ..RecorderSetup::new(conv)
     }
 }
 
@@ -93,12 +90,7 @@ impl RecorderHost {
             // Sensors from outside, no scene: nothing true to draw.
             None => RecorderSetup {
                 scene: "none".into(),
-                mount: mount(cfg),
-                truth: Vec::new(),
-                live_port: None,
-                host: "live".into(),
-                overflow: Overflow::Drop,
-                writer_hook: None,
+                ..live_setup(cfg, Vec::new())
             },
         };
         let setup = RecorderSetup {

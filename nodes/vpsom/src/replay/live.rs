@@ -39,11 +39,10 @@ use super::{
 use crate::config::Config;
 use crate::mapper::Mapper;
 use crate::planner::{self, PlannerInputs, Step, ViewPlanner};
+use crate::recording::messages as rec;
+use crate::recording::{convert, topic};
 use crate::step::gbv_cycle;
-use runtime::recorder::convert;
-use runtime::recorder::foxglove::messages::{RawImage, SceneUpdate};
-use runtime::recorder::messages as rec;
-use runtime::recorder::schemas::topic;
+use foxglove::messages::{RawImage, SceneUpdate};
 use shm_types::{
     DepthFrame, Detections, ObjectMap, OccupancyGrid, PlannerDecision, RobotState, boxed_zeroed,
     decision_kind, frame_outcome, planner_state,

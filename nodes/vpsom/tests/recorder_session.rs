@@ -1,20 +1,21 @@
-//! A synthetic session through the recorder: N messages of each kind in, the same counts out
-//! (per topic), every message decoded through its protobuf schema, the profiles' rate limits
-//! counted, and drops under overload counted exactly. The `#[ignore]`d `python_*` tests read the same files with the independent Python
+//! A synthetic session through the recorder with the app's converter: N messages of each kind
+//! in, the same counts out (per topic), every message decoded through its protobuf schema, the
+//! profiles' rate limits counted, and drops under overload counted exactly. The `#[ignore]`d `python_*` tests read the same files with the independent Python
 //! `mcap` reader; `.ci/run` runs them with `--ignored` (they fail without `VPSOM_PYTHON`).
 
+#[path = "../../../runtime/tests/recorder_common/mod.rs"]
 mod recorder_common;
 
 use recorder_common::*;
 use runtime::recorder::inspect::{export_csv, info};
-use runtime::recorder::schemas::topic;
 use runtime::recorder::{
     Kind, LatencySummary, LogLevel, NodeLatency, Profile, Recorder, RecorderConfig, RecorderSetup,
-    RecorderSummary, TruthBox,
+    RecorderSummary,
 };
 use shm_types::{NavGoal, NeckGoal, decision_kind};
 use std::collections::BTreeMap;
 use std::path::Path;
+use vpsom::recording::{MountGeometry, SceneConverter, TruthBox, primary_topic, topic};
 
 fn tmp(name: &str) -> std::path::PathBuf {
     let dir = std::env::temp_dir().join(format!("vpsom-recorder-{}", std::process::id()));
@@ -22,27 +23,32 @@ fn tmp(name: &str) -> std::path::PathBuf {
     dir.join(name)
 }
 
-fn setup() -> RecorderSetup {
+/// The app's converter of `cfg`, with the shipped camera and `truth`.
+fn app(cfg: &RecorderConfig, truth: Vec<TruthBox>) -> RecorderSetup {
+    RecorderSetup::new(SceneConverter::new(cfg, MountGeometry::default(), truth))
+}
+
+fn setup(cfg: &RecorderConfig) -> RecorderSetup {
+    let truth = vec![
+        TruthBox {
+            name: "desk".into(),
+            class: "dining table".into(),
+            center: [-1.9, 0.0, 0.36],
+            size: [1.8, 1.6, 0.72],
+            yaw: 0.0,
+        },
+        TruthBox {
+            name: "cup_green".into(),
+            class: "cup".into(),
+            center: [-1.4, -0.5, 0.78],
+            size: [0.1, 0.1, 0.12],
+            yaw: 0.3,
+        },
+    ];
     RecorderSetup {
         scene: "synthetic".into(),
         host: "live".into(),
-        truth: vec![
-            TruthBox {
-                name: "desk".into(),
-                class: "dining table".into(),
-                center: [-1.9, 0.0, 0.36],
-                size: [1.8, 1.6, 0.72],
-                yaw: 0.0,
-            },
-            TruthBox {
-                name: "cup_green".into(),
-                class: "cup".into(),
-                center: [-1.4, -0.5, 0.78],
-                size: [0.1, 0.1, 0.12],
-                yaw: 0.3,
-            },
-        ],
-        ..Default::default()
+        ..app(cfg, truth)
     }
 }
 
@@ -57,7 +63,7 @@ fn write_session(path: &Path) -> RecorderSummary {
         flush_interval_s: 0.05,
         ..Default::default()
     };
-    let rec = Recorder::create(path, &cfg, setup()).unwrap();
+    let rec = Recorder::create(path, &cfg, setup(&cfg)).unwrap();
     let h = rec.handle();
     let mut hist = hdrhistogram::Histogram::<u64>::new(3).unwrap();
     h.record_nav_grid(&grid(0));
@@ -129,8 +135,18 @@ fn every_message_is_written_once_and_decodes_with_its_schema() {
         } else {
             N
         };
-        assert_eq!(summary.drops.offered[k.topic()], want, "{}", k.topic());
-        assert_eq!(summary.written[k.topic()], want, "{}", k.topic());
+        assert_eq!(
+            summary.drops.offered[primary_topic(k)],
+            want,
+            "{}",
+            primary_topic(k)
+        );
+        assert_eq!(
+            summary.written[primary_topic(k)],
+            want,
+            "{}",
+            primary_topic(k)
+        );
     }
 
     let (msgs, end) = read_all(&path);
@@ -286,7 +302,7 @@ fn write_overload(path: &Path) -> RecorderSummary {
         pool_len: 2,
         ..Default::default()
     };
-    let rec = Recorder::create(path, &cfg, RecorderSetup::default()).unwrap();
+    let rec = Recorder::create(path, &cfg, app(&cfg, Vec::new())).unwrap();
     let h = rec.handle();
     let frame = depth(1, 640, 480);
     let mut f = shm_types::boxed_zeroed::<shm_types::DepthFrame>();
@@ -375,7 +391,7 @@ fn view_profile_keeps_rate_limits_and_counts_what_it_leaves_out() {
         (topic::DEPTH.to_string(), 2.0),
         (topic::STATE.to_string(), 0.0),
     ]);
-    let rec = Recorder::create(&path, &cfg, RecorderSetup::default()).unwrap();
+    let rec = Recorder::create(&path, &cfg, app(&cfg, Vec::new())).unwrap();
     let h = rec.handle();
     // 30 frames and states at t = seq × 33.333333 ms.
     for i in 1..=30 {
@@ -419,7 +435,8 @@ fn view_profile_keeps_rate_limits_and_counts_what_it_leaves_out() {
 fn dropping_the_recorder_finishes_the_file() {
     let path = tmp("dropped.mcap");
     {
-        let rec = Recorder::create(&path, &RecorderConfig::default(), setup()).unwrap();
+        let cfg = RecorderConfig::default();
+        let rec = Recorder::create(&path, &cfg, setup(&cfg)).unwrap();
         let h = rec.handle();
         for i in 1..=5 {
             h.record_state(&state(i));
@@ -434,7 +451,7 @@ fn dropping_the_recorder_finishes_the_file() {
 
 #[test]
 fn foxglove_layout_names_recorded_topics() {
-    let text = include_str!("../../config/foxglove-layout.json");
+    let text = include_str!("../../../config/foxglove-layout.json");
     let v: serde_json::Value = serde_json::from_str(text).unwrap();
     let cfg = v["configById"].as_object().unwrap();
     assert!(cfg.keys().any(|k| k.starts_with("3D!")));
@@ -452,10 +469,7 @@ fn foxglove_layout_names_recorded_topics() {
         "{path}"
     );
     // Every topic the 3D panel names is one the recorder writes.
-    let known: Vec<&str> = runtime::recorder::schemas::channels()
-        .iter()
-        .map(|c| c.topic)
-        .collect();
+    let known = vpsom::recording::topics();
     for t in cfg["3D!vpsom"]["topics"].as_object().unwrap().keys() {
         assert!(known.contains(&t.as_str()), "{t}");
     }

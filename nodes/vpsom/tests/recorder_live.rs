@@ -5,12 +5,12 @@
 //! (the `foxglove` crate's) and `foxglove.websocket.v1` (Lichtblick's and `@foxglove/ws-protocol`'s,
 //! refused with HTTP 400 before the live view's front renamed it: issue 36).
 
+#[path = "../../../runtime/tests/recorder_common/mod.rs"]
 mod recorder_common;
 
 use foxglove::Decode;
 use foxglove::messages::{RawImage, SceneUpdate};
 use recorder_common::*;
-use runtime::recorder::schemas::topic;
 use runtime::recorder::{Recorder, RecorderConfig, RecorderSetup};
 use serde_json::{Value, json};
 use std::sync::Arc;
@@ -18,6 +18,7 @@ use std::sync::atomic::{AtomicBool, Ordering};
 use std::time::{Duration, Instant};
 use tungstenite::client::IntoClientRequest;
 use tungstenite::{Message, stream::MaybeTlsStream};
+use vpsom::recording::{MountGeometry, SceneConverter, topic};
 
 #[test]
 fn a_foxglove_client_sees_the_channels_and_receives_images_and_scenes() {
@@ -35,11 +36,13 @@ fn client_sees_channels_and_receives_images_and_scenes(subprotocol: &str) {
         std::process::id()
     ));
     std::fs::create_dir_all(&dir).unwrap();
+    let cfg = RecorderConfig::default();
+    let conv = SceneConverter::new(&cfg, MountGeometry::default(), Vec::new());
     let setup = RecorderSetup {
         live_port: Some(0),
-        ..Default::default()
+        ..RecorderSetup::new(conv)
     };
-    let rec = Recorder::create(&dir.join("trace.mcap"), &RecorderConfig::default(), setup).unwrap();
+    let rec = Recorder::create(&dir.join("trace.mcap"), &cfg, setup).unwrap();
     let port = rec.live_port().expect("a live view was asked for");
     // A producer recording as a robot does, until the client is done.
     let stop = Arc::new(AtomicBool::new(false));
@@ -73,7 +76,7 @@ fn client_sees_channels_and_receives_images_and_scenes(subprotocol: &str) {
     // Hang guard, generous on purpose (a loaded machine): 60 s for the whole exchange.
     let deadline = Instant::now() + Duration::from_secs(60);
     let mut channels: Vec<Value> = Vec::new();
-    while channels.len() < runtime::recorder::schemas::channels().len() {
+    while channels.len() < vpsom::recording::channels().len() {
         assert!(Instant::now() < deadline, "no advertisement: {channels:?}");
         if let Ok(Message::Text(t)) = ws.read() {
             let v: Value = serde_json::from_str(&t).unwrap();

@@ -4,7 +4,7 @@
 //! 0.5 Hz, deadline events at 20 Hz, neck goals at 20 Hz, a latency summary and a log line at 1 Hz.
 //!
 //! ```text
-//! cargo run --release -p runtime --example recorder_load -- [--seconds S] [--out OUT.mcap]
+//! cargo run --release -p vpsom --example recorder_load -- [--seconds S] [--out OUT.mcap]
 //! ```
 //! Records for `S` seconds (default 10) into `OUT.mcap` (default `vpsom-recorder-load.mcap` in
 //! the temporary directory). Prints the writer thread's CPU time as a share of one core, the
@@ -15,6 +15,7 @@ use runtime::recorder::{
 };
 use shm_types::*;
 use std::time::{Duration, Instant};
+use vpsom::recording::{MountGeometry, SceneConverter};
 
 fn header(seq: u64, t: Duration) -> Header {
     Header {
@@ -24,6 +25,7 @@ fn header(seq: u64, t: Duration) -> Header {
     }
 }
 
+#[path = "../../../runtime/examples/common/mod.rs"]
 mod common;
 
 fn main() -> Result<(), Box<dyn std::error::Error>> {
@@ -39,7 +41,9 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
             .to_string()
     });
     let cfg = RecorderConfig::default();
-    let rec = Recorder::create(out.as_ref(), &cfg, RecorderSetup::default())?;
+    // The app's converter: the cost measured is the real conversion's.
+    let conv = SceneConverter::new(&cfg, MountGeometry::default(), Vec::new());
+    let rec = Recorder::create(out.as_ref(), &cfg, RecorderSetup::new(conv))?;
     let h = rec.handle();
 
     // Inputs shaped like the real ones: smooth depth with noise, a full map, full decisions.
