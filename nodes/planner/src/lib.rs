@@ -18,6 +18,7 @@
 //! | [`reach`] | inflated navigation grid, reachability (Dijkstra) and collision |
 //! | [`frontier`], [`coverage`] | baseline algorithms as jobs (frontiers: every planner's exploration) |
 //! | [`vpsom`], [`baselines`] | the three planners (state machines) |
+//! | [`recovery`] | what every planner does while localization is lost (neck sweep, drive) |
 //! | [`session`] | the interface: inputs, [`Step`], jobs, status, [`Summary`] |
 //! | [`synth`] | synthetic maps (scene-3-like) for benchmarks and tests |
 //!
@@ -75,6 +76,7 @@ pub mod gbv;
 pub mod giveup;
 pub mod lbv;
 pub mod reach;
+pub mod recovery;
 pub mod session;
 pub mod sight;
 pub mod synth;
@@ -84,12 +86,14 @@ pub mod vpsom;
 pub use baselines::{CoveragePlanner, FrontierPlanner};
 pub use config::{
     AblationConfig, BootstrapConfig, CoverageConfig, FaRelevance, FrontierConfig, GbvConfig,
-    GiveUpConfig, LbvConfig, Occluders, PlannerConfig, PlannerKind, UnknownPlanner, UnknownTerm,
+    GiveUpConfig, LbvConfig, Occluders, PlannerConfig, PlannerKind, RecoveryConfig, UnknownPlanner,
+    UnknownTerm,
 };
 pub use evaluate::{EvalParams, FaFilter, Target, Weights, evaluate_view, evaluate_view_in};
 pub use gbv::{GbvJob, GbvResult};
 pub use giveup::{GiveUpCause, GivenUpObject};
 pub use lbv::Lbv;
+pub use recovery::{Recovery, RecoveryStats};
 pub use session::{
     JobOutput, PlannerInputs, PlannerJob, PlannerStatus, Step, Summary, ViewPlanner,
 };

@@ -1,7 +1,7 @@
 //! The planner interface shared by VP-SOM and the baselines: inputs, steps, jobs, status and
 //! summary, plus the bookkeeping every planner needs (`Session`: status, goal ids, the job in
 //! flight, reusable snapshot buffers, frontier exploration and whether the room is explored; the
-//! look-around).
+//! look-around; the localization recovery, [`crate::recovery`]).
 
 use crate::clusters::{self, SideTracker};
 use crate::config::{PlannerConfig, PlannerKind};
@@ -10,6 +10,7 @@ use crate::evaluate::{EvalParams, Scoring, Weights};
 use crate::frontier::{FrontierJob, FrontierParams, FrontierResult};
 use crate::gbv::{GbvJob, GbvResult};
 use crate::giveup::GivenUpObject;
+use crate::recovery::{Action, Recovery, RecoveryStats, escape_pose};
 use shm_types::{
     Candidate, NavGoal, NeckGoal, ObjectMap, OccupancyGrid, PlannerDecision, RobotState,
     boxed_zeroed, decision_kind, goal_kind, nav_status, planner_state,
@@ -87,6 +88,9 @@ pub struct Summary {
     pub objects_given_up: u32,
     /// Whether the room was explored: the last frontier round found no reachable frontier.
     pub explored: bool,
+    /// Localization recoveries (`[planner.recovery]`): started, ended with tracking back, full
+    /// sweeps that found nothing, drives.
+    pub recovery: RecoveryStats,
     /// Time the session ended, ns.
     pub finished_ns: Option<u64>,
 }
@@ -458,6 +462,8 @@ pub(crate) struct Session {
     pub(crate) score_frontiers: Option<(EvalParams, Weights)>,
     /// The trace of the newest chassis-goal decision, until the host takes it.
     pub(crate) decision: Option<Box<PlannerDecision>>,
+    /// The localization recovery (every planner).
+    recovery: Recovery,
     blacklist: Vec<[f32; 2]>,
     pending: bool,
     status: PlannerStatus,
@@ -483,6 +489,7 @@ impl Session {
             explored: false,
             score_frontiers: None,
             decision: None,
+            recovery: Recovery::new(&cfg.recovery),
             blacklist: Vec::new(),
             pending: false,
             status: PlannerStatus::Running,
@@ -499,6 +506,7 @@ impl Session {
                 foreground_done: 0,
                 objects_given_up: 0,
                 explored: false,
+                recovery: RecoveryStats::default(),
                 finished_ns: None,
             },
             jobs: 0,
@@ -506,11 +514,13 @@ impl Session {
     }
 
     /// The start of every `next_goal`: takes the map's counts for the summary, and returns the
-    /// step to return at once (`Finished` once the session is over, `Wait` while a job is out).
-    pub(crate) fn begin(&mut self, map: &ObjectMap) -> Option<Step> {
+    /// step to return at once (`Finished` once the session is over, `Wait` while a job is out,
+    /// the recovery's drive or `Wait` while localization is being recovered: [`Self::recover`]).
+    pub(crate) fn begin(&mut self, inputs: &PlannerInputs<'_>, now_ns: u64) -> Option<Step> {
         if self.status.is_finished() {
             return Some(Step::Finished(self.summary()));
         }
+        let map = inputs.map;
         let cl = clusters::clusters(map, self.eps_sopm, &self.sides, self.min_sides);
         let s = &mut self.summary;
         s.clusters = cl.len() as u32;
@@ -518,7 +528,67 @@ impl Session {
         let fg = map.objects().iter().filter(|o| !o.is_background());
         s.foreground = fg.clone().count() as u32;
         s.foreground_done = fg.filter(|o| clusters::fg_done(o, self.eps_sopm)).count() as u32;
-        self.pending.then_some(Step::Wait)
+        let recovering = self.recover(inputs, now_ns);
+        if self.pending {
+            return Some(Step::Wait);
+        }
+        recovering
+    }
+
+    /// The localization recovery's part of `next_goal`, the same for every planner: `None` while
+    /// tracking holds (the planner is in charge); else the planner waits (`Wait`), except for the
+    /// recovery's drive, issued here with the planner's goal ids (kind RECOVERY). Once the
+    /// recovery is over, a recovery goal still current is dropped so that the planner plans
+    /// afresh (its own goal, if one was superseded, is not waited for).
+    fn recover(&mut self, inputs: &PlannerInputs<'_>, now_ns: u64) -> Option<Step> {
+        let state = inputs.state;
+        let action = self
+            .recovery
+            .observe(state.localization_ok != 0, state.neck_yaw, now_ns);
+        let driving = self
+            .goals
+            .current
+            .is_some_and(|g| g.kind == goal_kind::RECOVERY);
+        match action {
+            Action::None => {
+                if driving {
+                    self.goals.current = None;
+                }
+                None
+            }
+            Action::Neck(_) => Some(Step::Wait),
+            Action::Drive if self.pending => Some(Step::Wait),
+            Action::Drive => {
+                let nav = &self.frontier.nav;
+                match escape_pose(inputs.nav, nav, state, self.recovery.move_m) {
+                    Some(pose) => {
+                        self.recovery.drive_issued();
+                        let goal = self.goals.issue(pose, 0.0, -1, goal_kind::RECOVERY, now_ns);
+                        Some(Step::Goal(goal))
+                    }
+                    None => {
+                        self.recovery.drive_done(state.neck_yaw, now_ns);
+                        Some(Step::Wait)
+                    }
+                }
+            }
+            Action::Driving => {
+                // Over when the base is done with it, or when a goal of the planner (a job
+                // that came back meanwhile) superseded it.
+                if !driving || self.goals.poll(state) != Outcome::Pending {
+                    self.recovery.drive_done(state.neck_yaw, now_ns);
+                }
+                Some(Step::Wait)
+            }
+        }
+    }
+
+    /// The neck yaw while the recovery is in charge (every planner's `neck_goal` starts here):
+    /// `None` while tracking holds.
+    pub(crate) fn recovery_neck(&mut self, state: &RobotState, now_ns: u64) -> Option<f32> {
+        self.recovery
+            .observe(state.localization_ok != 0, state.neck_yaw, now_ns);
+        self.recovery.neck()
     }
 
     /// Hand a job to the host (one planning round).
@@ -653,6 +723,7 @@ impl Session {
             clusters_given_up: self.given_up.len() as u32,
             objects_given_up: self.objects_given_up,
             explored: self.explored,
+            recovery: self.recovery.stats(),
             ..self.summary
         }
     }
@@ -750,11 +821,11 @@ mod tests {
             nav: &grid,
             explore: &grid,
         };
-        assert!(s.begin(&map).is_none());
+        assert!(s.begin(&inputs, 0).is_none());
         let Step::Compute(job) = s.frontier_job(&inputs) else {
             panic!("a frontier job");
         };
-        assert!(matches!(s.begin(&map), Some(Step::Wait)), "job out");
+        assert!(matches!(s.begin(&inputs, 0), Some(Step::Wait)), "job out");
         // An empty exploration grid has no frontier: the room counts as explored.
         let back = s.job_back(job.run(), 7);
         assert!(matches!(back, Back::Explored));
@@ -767,7 +838,7 @@ mod tests {
             (PlannerStatus::Terminated, 1, Some(7), true)
         );
         assert_eq!(sum.reason(), "explored (no reachable frontier)");
-        assert!(matches!(s.begin(&map), Some(Step::Finished(_))));
+        assert!(matches!(s.begin(&inputs, 7), Some(Step::Finished(_))));
         assert!(
             s.buffers.explore.is_some() && s.buffers.nav.is_some(),
             "buffers reclaimed"
