@@ -346,8 +346,10 @@ impl FrontierConfig {
 pub struct RecoveryConfig {
     /// Whether the recovery runs at all.
     pub enabled: bool,
-    /// Tracking lost this long before the recovery takes over, seconds.
+    /// Tracking lost this long while the base stands before the recovery takes over, seconds.
     pub lost_grace_s: f32,
+    /// ... while the base drives to a goal, seconds.
+    pub lost_grace_driving_s: f32,
     /// Neck stops of the 360° sweep (evenly spaced).
     pub sweep_stops: usize,
     /// Time at each stop from its command (the slew included), seconds.
@@ -369,7 +371,7 @@ impl RecoveryConfig {
     /// Range-check; `c` is at this table.
     pub fn validate(&self, c: &Checker) -> Result<(), ConfigError> {
         settings::ranges!(c, self, {
-            lost_grace_s: in_range(0.0, 600.0),
+            [lost_grace_s, lost_grace_driving_s]: in_range(0.0, 600.0),
             sweep_stops: count(1, 360),
             [stop_s, hold_s]: in_range(0.0, 60.0),
             move_m: in_range(0.0, 10.0),

@@ -6,7 +6,7 @@
 //! is in charge or the recovery is, and what the neck and base do meanwhile.
 //!
 //! ```text
-//!            lost for lost_grace_s                 tracking holds
+//!      lost for lost_grace_s (stopped)             tracking holds
 //!  Idle ───────────────────────────▶ Sweep ────────────────────────▶ Hold ──(hold_s)──▶ Idle
 //!   ▲                                 │  ▲                            │ lost again
 //!   │                                 │  └────────────────────────────┘ (same sweep)
@@ -16,6 +16,9 @@
 //!   │                                 └──────▶ Sweep (a new one)
 //! ```
 //!
+//! - **Idle**: the recovery takes over once tracking has been lost for `lost_grace_s` while the
+//!   base stands (no goal, or its goal reached or refused: nothing will change the view), or for
+//!   `lost_grace_driving_s` while it drives (the base's own turns usually bring tracking back).
 //! - **Sweep**: the neck visits `sweep_stops` stops over 360° from where it was, `stop_s` at each
 //!   (slew and settle), so the camera is still at every stop whatever the base does.
 //! - **Hold**: tracking is back; the neck stays where it tracks for `hold_s` (the mapper takes
@@ -97,6 +100,7 @@ pub struct RecoveryStats {
 pub struct Recovery {
     enabled: bool,
     grace_ns: u64,
+    grace_driving_ns: u64,
     stops: usize,
     step: f32,
     stop_ns: u64,
@@ -119,6 +123,7 @@ impl Recovery {
         Self {
             enabled: cfg.enabled,
             grace_ns: ns(cfg.lost_grace_s),
+            grace_driving_ns: ns(cfg.lost_grace_driving_s),
             stops,
             step: TAU / stops as f32,
             stop_ns: ns(cfg.stop_s),
@@ -145,9 +150,10 @@ impl Recovery {
         self.stats
     }
 
-    /// Take an observation: `tracking` (the state's `localization_ok`), the measured neck yaw
-    /// and the time. Idempotent for a repeated time; returns what to do now.
-    pub fn observe(&mut self, tracking: bool, neck_yaw: f32, now_ns: u64) -> Action {
+    /// Take an observation: `tracking` (the state's `localization_ok`), whether the base is
+    /// `driving` to a goal (`nav_status` MOVING), the measured neck yaw and the time. Idempotent
+    /// for a repeated time; returns what to do now.
+    pub fn observe(&mut self, tracking: bool, driving: bool, neck_yaw: f32, now_ns: u64) -> Action {
         if !self.enabled {
             return Action::None;
         }
@@ -158,7 +164,14 @@ impl Recovery {
         }
         self.phase = match self.phase {
             Phase::Idle => match self.lost_since {
-                Some(t) if now_ns.saturating_sub(t) >= self.grace_ns => {
+                Some(t)
+                    if now_ns.saturating_sub(t)
+                        >= if driving {
+                            self.grace_driving_ns
+                        } else {
+                            self.grace_ns
+                        } =>
+                {
                     self.stats.started += 1;
                     self.sweep_from(0, neck_yaw, now_ns)
                 }
@@ -354,6 +367,7 @@ mod tests {
         RecoveryConfig {
             enabled: true,
             lost_grace_s: 2.0,
+            lost_grace_driving_s: 5.0,
             sweep_stops: 4,
             stop_s: 1.0,
             hold_s: 1.0,
@@ -368,38 +382,58 @@ mod tests {
     #[test]
     fn sweeps_until_tracking_holds_then_resumes() {
         let mut r = Recovery::new(&cfg());
-        assert_eq!(r.observe(true, 0.0, 0), Action::None);
+        assert_eq!(r.observe(true, false, 0.0, 0), Action::None);
         // Lost, within the grace time: the planner stays in charge.
-        assert_eq!(r.observe(false, 0.0, S / 2), Action::None);
-        assert_eq!(r.observe(false, 0.0, 2 * S), Action::None);
+        assert_eq!(r.observe(false, false, 0.0, S / 2), Action::None);
+        assert_eq!(r.observe(false, false, 0.0, 2 * S), Action::None);
         // Grace over (lost since 0.5 s): the sweep's first stop, one step (90°) on.
-        let Action::Neck(a) = r.observe(false, 0.0, 5 * S / 2) else {
+        let Action::Neck(a) = r.observe(false, false, 0.0, 5 * S / 2) else {
             panic!("sweeping: {:?}", r.phase());
         };
         assert!(close(a, PI / 2.0), "{a}");
         assert!(r.active() && r.stats().started == 1);
         // The same stop until stop_s has passed, then the next.
-        assert_eq!(r.observe(false, a, 3 * S), Action::Neck(a));
-        let Action::Neck(b) = r.observe(false, a, 7 * S / 2) else {
+        assert_eq!(r.observe(false, false, a, 3 * S), Action::Neck(a));
+        let Action::Neck(b) = r.observe(false, false, a, 7 * S / 2) else {
             panic!();
         };
         assert!(close(b, PI), "{b}");
         // Tracking back: the neck holds where it is (not where it was going).
-        assert_eq!(r.observe(true, 3.0, 4 * S), Action::Neck(3.0));
+        assert_eq!(r.observe(true, false, 3.0, 4 * S), Action::Neck(3.0));
         // Lost again during the hold: the same sweep goes on at its stop.
-        assert_eq!(r.observe(false, 3.0, 9 * S / 2), Action::Neck(b));
-        assert_eq!(r.observe(true, 3.1, 5 * S), Action::Neck(3.1));
+        assert_eq!(r.observe(false, false, 3.0, 9 * S / 2), Action::Neck(b));
+        assert_eq!(r.observe(true, false, 3.1, 5 * S), Action::Neck(3.1));
         // Held for hold_s: the planner resumes.
-        assert_eq!(r.observe(true, 3.1, 11 * S / 2), Action::Neck(3.1));
-        assert_eq!(r.observe(true, 3.1, 6 * S), Action::None);
+        assert_eq!(r.observe(true, false, 3.1, 11 * S / 2), Action::Neck(3.1));
+        assert_eq!(r.observe(true, false, 3.1, 6 * S), Action::None);
         assert!(!r.active() && r.neck().is_none());
         assert_eq!(r.stats().recovered, 1);
         assert_eq!(r.stats().failed_sweeps, 0);
         // A short loss later: the grace time counts again from the new loss.
-        assert_eq!(r.observe(false, 0.0, 10 * S), Action::None);
-        assert_eq!(r.observe(true, 0.0, 11 * S), Action::None);
-        assert_eq!(r.observe(false, 0.0, 12 * S), Action::None);
-        assert_eq!(r.observe(false, 0.0, 13 * S), Action::None);
+        assert_eq!(r.observe(false, false, 0.0, 10 * S), Action::None);
+        assert_eq!(r.observe(true, false, 0.0, 11 * S), Action::None);
+        assert_eq!(r.observe(false, false, 0.0, 12 * S), Action::None);
+        assert_eq!(r.observe(false, false, 0.0, 13 * S), Action::None);
+    }
+
+    #[test]
+    fn a_driving_base_gets_longer_to_track_again() {
+        let mut r = Recovery::new(&cfg());
+        // Lost while driving: not before lost_grace_driving_s.
+        assert_eq!(r.observe(false, true, 0.0, 0), Action::None);
+        assert_eq!(r.observe(false, true, 0.0, 4 * S), Action::None);
+        assert!(matches!(
+            r.observe(false, true, 0.0, 5 * S),
+            Action::Neck(_)
+        ));
+        // Lost while driving, then the base stops: at once once lost_grace_s has passed.
+        let mut r = Recovery::new(&cfg());
+        assert_eq!(r.observe(false, true, 0.0, 0), Action::None);
+        assert_eq!(r.observe(false, true, 0.0, 3 * S), Action::None);
+        assert!(matches!(
+            r.observe(false, false, 0.0, 3 * S),
+            Action::Neck(_)
+        ));
     }
 
     #[test]
@@ -410,7 +444,7 @@ mod tests {
         // Never tracking: grace, then 4 stops of 1 s each, then a drive.
         let mut action = Action::None;
         while t <= 7 * S {
-            action = r.observe(false, 0.0, t);
+            action = r.observe(false, false, 0.0, t);
             if let Action::Neck(y) = action
                 && yaws.last() != Some(&y)
             {
@@ -430,7 +464,7 @@ mod tests {
             "the camera looks where the base drives"
         );
         r.drive_issued();
-        assert_eq!(r.observe(false, 0.0, t), Action::Driving);
+        assert_eq!(r.observe(false, false, 0.0, t), Action::Driving);
         assert_eq!(r.stats().drives, 1);
         // The drive ends: a new sweep from the neck's yaw.
         r.drive_done(0.2, t);
@@ -439,12 +473,12 @@ mod tests {
             "{:?}",
             r.phase()
         );
-        assert_eq!(r.observe(false, 0.2, t + S / 2), Action::Neck(0.2));
+        assert_eq!(r.observe(false, false, 0.2, t + S / 2), Action::Neck(0.2));
         // Tracking on the way of a later drive: hold, then resume.
         let mut r2 = r.clone();
         r2.phase = Phase::Move { issued: true };
-        assert_eq!(r2.observe(true, 0.0, t), Action::Neck(0.0));
-        assert_eq!(r2.observe(true, 0.0, t + S), Action::None);
+        assert_eq!(r2.observe(true, false, 0.0, t), Action::Neck(0.0));
+        assert_eq!(r2.observe(true, false, 0.0, t + S), Action::None);
         assert_eq!(r2.stats().recovered, 1);
     }
 
@@ -455,7 +489,7 @@ mod tests {
             ..cfg()
         });
         for k in 0..100 {
-            assert_eq!(r.observe(false, 0.0, k * S), Action::None);
+            assert_eq!(r.observe(false, false, 0.0, k * S), Action::None);
         }
         assert_eq!(r.stats(), RecoveryStats::default());
     }

@@ -140,7 +140,8 @@ impl fmt::Display for Summary {
         write!(
             f,
             "{}: {:?}; goals {} ({} unreachable), rounds {}; clusters {}/{} done, {} given up; \
-             foreground {}/{} complete, {} given up; explored {}",
+             foreground {}/{} complete, {} given up; explored {}; localization recoveries {} \
+             ({} recovered, {} drives)",
             self.kind,
             self.status,
             self.goals_issued,
@@ -152,7 +153,10 @@ impl fmt::Display for Summary {
             self.foreground_done,
             self.foreground,
             self.objects_given_up,
-            self.explored
+            self.explored,
+            self.recovery.started,
+            self.recovery.recovered,
+            self.recovery.drives
         )
     }
 }
@@ -544,7 +548,7 @@ impl Session {
         let state = inputs.state;
         let action = self
             .recovery
-            .observe(state.localization_ok != 0, state.neck_yaw, now_ns);
+            .observe(tracking(state), driving(state), state.neck_yaw, now_ns);
         let driving = self
             .goals
             .current
@@ -587,7 +591,7 @@ impl Session {
     /// `None` while tracking holds.
     pub(crate) fn recovery_neck(&mut self, state: &RobotState, now_ns: u64) -> Option<f32> {
         self.recovery
-            .observe(state.localization_ok != 0, state.neck_yaw, now_ns);
+            .observe(tracking(state), driving(state), state.neck_yaw, now_ns);
         self.recovery.neck()
     }
 
@@ -729,6 +733,16 @@ impl Session {
     }
 }
 
+/// Whether visual localization tracks (the recovery's input).
+fn tracking(state: &RobotState) -> bool {
+    state.localization_ok != 0
+}
+
+/// Whether the base is driving to a goal (the recovery waits longer then).
+fn driving(state: &RobotState) -> bool {
+    state.nav_status == nav_status::MOVING
+}
+
 /// A job output back at its planner (see [`Session::job_back`]).
 #[derive(Debug)]
 pub(crate) enum Back {
@@ -843,5 +857,120 @@ mod tests {
             s.buffers.explore.is_some() && s.buffers.nav.is_some(),
             "buffers reclaimed"
         );
+    }
+
+    /// Every planner, lost at the start in a 4 m room: it waits while the neck sweeps (the
+    /// recovery's stops), drives once a full sweep found nothing, sweeps again after the drive,
+    /// and plans again once tracking holds.
+    #[test]
+    fn every_planner_recovers_the_same_way() {
+        use crate::config::PlannerKind;
+        use geom::CameraConfig;
+        use shm_types::grid_cell;
+        let mut nav = boxed_zeroed::<OccupancyGrid>();
+        (nav.resolution, nav.width, nav.height) = (0.1, 40, 40);
+        for iy in 0..40usize {
+            for ix in 0..40usize {
+                if ix.min(iy).min(39 - ix).min(39 - iy) <= 3 {
+                    nav.cells[iy * 40 + ix] = grid_cell::OCCUPIED;
+                }
+            }
+        }
+        let mut explore = boxed_zeroed::<OccupancyGrid>();
+        (explore.resolution, explore.width, explore.height) = (0.1, 40, 40);
+        explore.cells[..1600].fill(grid_cell::UNKNOWN);
+        let map = boxed_zeroed::<ObjectMap>();
+        let ms = 1_000_000u64;
+        for kind in [
+            PlannerKind::Vpsom,
+            PlannerKind::Coverage,
+            PlannerKind::Frontier,
+        ] {
+            let cfg = PlannerConfig {
+                kind,
+                ..PlannerConfig::default()
+            };
+            let r = cfg.recovery;
+            let mut p = crate::make_planner(&cfg, &CameraConfig::default());
+            // 0.7 m from the north wall's inner face (y = 3.6), facing it; lost.
+            let mut state = RobotState {
+                base_pose: [2.0, 2.9, std::f32::consts::FRAC_PI_2],
+                ..Default::default()
+            };
+            let mut necks = Vec::new();
+            let mut drive = None;
+            let mut t = 0;
+            while t < 30_000 * ms {
+                let neck = p.neck_goal(&map, &state, t);
+                state.neck_yaw = neck.yaw; // the neck follows at once
+                if necks.last() != Some(&neck.yaw) {
+                    necks.push(neck.yaw);
+                }
+                let inputs = PlannerInputs {
+                    map: &map,
+                    state: &state,
+                    nav: &nav,
+                    explore: &explore,
+                };
+                let mut step = p.next_goal(&inputs, t);
+                while let Step::Compute(job) = step {
+                    step = p.job_done(job.run(), t);
+                }
+                match step {
+                    Step::Goal(g) => {
+                        assert_eq!(g.kind, goal_kind::RECOVERY, "{kind}: {g:?}");
+                        drive = Some((g, t));
+                        break;
+                    }
+                    Step::Finished(s) => panic!("{kind}: {s}"),
+                    _ => {}
+                }
+                t += 50 * ms;
+            }
+            let (goal, at) = drive.unwrap_or_else(|| panic!("{kind}: no drive"));
+            // After the grace time and a full sweep of sweep_stops stops.
+            let sweep = r.lost_grace_s + r.sweep_stops as f32 * r.stop_s;
+            assert!((at as f32 * 1e-9 - sweep).abs() < 0.2, "{kind}: {at}");
+            assert!(necks.len() > r.sweep_stops, "{kind}: {necks:?}");
+            assert!(
+                goal.pose[1] < 2.4 && goal.pose[2] < 0.0,
+                "{kind}: away from the wall, facing the room: {goal:?}"
+            );
+            let s = p.summary();
+            assert_eq!((s.recovery.failed_sweeps, s.recovery.drives), (1, 1));
+            // The drive is reached: a new sweep (the planner still waits).
+            state.nav_goal_id = goal.goal_id;
+            state.nav_status = nav_status::REACHED;
+            state.base_pose = goal.pose;
+            let inputs = PlannerInputs {
+                map: &map,
+                state: &state,
+                nav: &nav,
+                explore: &explore,
+            };
+            assert!(matches!(p.next_goal(&inputs, at + 100 * ms), Step::Wait));
+            // Tracking holds: hold_s later the planner plans again (a frontier round: the grid
+            // is still unknown, so it waits for frames; VP-SOM and coverage look around).
+            state.localization_ok = 1;
+            let held = at + 200 * ms + (f64::from(r.hold_s) * 1e9) as u64;
+            let mut t = at + 200 * ms;
+            while t <= held + 100 * ms {
+                let inputs = PlannerInputs {
+                    map: &map,
+                    state: &state,
+                    nav: &nav,
+                    explore: &explore,
+                };
+                p.neck_goal(&map, &state, t);
+                if let Step::Compute(job) = p.next_goal(&inputs, t) {
+                    assert!(t >= held, "{kind}: planned while the neck held");
+                    assert!(!matches!(p.job_done(job.run(), t), Step::Finished(_)));
+                }
+                t += 50 * ms;
+            }
+            let s = p.summary();
+            assert_eq!((s.recovery.started, s.recovery.recovered), (1, 1), "{kind}");
+            assert_eq!(s.goals_issued, 1, "{kind}: only the drive");
+        }
     }
 }
