@@ -346,9 +346,10 @@ impl FrontierConfig {
 pub struct RecoveryConfig {
     /// Whether the recovery runs at all.
     pub enabled: bool,
-    /// Tracking lost this long while the base stands before the recovery takes over, seconds.
+    /// Tracking lost, and the base standing (not driving to a goal), this long before the
+    /// recovery takes over, seconds.
     pub lost_grace_s: f32,
-    /// ... while the base drives to a goal, seconds.
+    /// Tracking lost this long, whatever the base does, before the recovery takes over, seconds.
     pub lost_grace_driving_s: f32,
     /// Neck stops of the 360° sweep (evenly spaced).
     pub sweep_stops: usize,

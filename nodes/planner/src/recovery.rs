@@ -16,9 +16,10 @@
 //!   │                                 └──────▶ Sweep (a new one)
 //! ```
 //!
-//! - **Idle**: the recovery takes over once tracking has been lost for `lost_grace_s` while the
-//!   base stands (no goal, or its goal reached or refused: nothing will change the view), or for
-//!   `lost_grace_driving_s` while it drives (the base's own turns usually bring tracking back).
+//! - **Idle**: the recovery takes over once tracking has been lost, and the base has stood, for
+//!   `lost_grace_s` (no goal, or its goal reached or refused, and the planner sent no new one:
+//!   nothing will change the view), or once tracking has been lost for `lost_grace_driving_s`
+//!   whatever the base does (a drive's own turns usually bring tracking back).
 //! - **Sweep**: the neck visits `sweep_stops` stops over 360° from where it was, `stop_s` at each
 //!   (slew and settle), so the camera is still at every stop whatever the base does.
 //! - **Hold**: tracking is back; the neck stays where it tracks for `hold_s` (the mapper takes
@@ -108,6 +109,7 @@ pub struct Recovery {
     /// Drive distance, metres.
     pub move_m: f32,
     lost_since: Option<u64>,
+    standing_since: Option<u64>,
     phase: Phase,
     stats: RecoveryStats,
 }
@@ -130,6 +132,7 @@ impl Recovery {
             hold_ns: ns(cfg.hold_s),
             move_m: cfg.move_m,
             lost_since: None,
+            standing_since: None,
             phase: Phase::Idle,
             stats: RecoveryStats::default(),
         }
@@ -162,15 +165,18 @@ impl Recovery {
         } else {
             self.lost_since.get_or_insert(now_ns);
         }
+        if driving {
+            self.standing_since = None;
+        } else {
+            self.standing_since.get_or_insert(now_ns);
+        }
         self.phase = match self.phase {
-            Phase::Idle => match self.lost_since {
-                Some(t)
-                    if now_ns.saturating_sub(t)
-                        >= if driving {
-                            self.grace_driving_ns
-                        } else {
-                            self.grace_ns
-                        } =>
+            Phase::Idle => match (self.lost_since, self.standing_since) {
+                (Some(lost), standing)
+                    if now_ns.saturating_sub(lost) >= self.grace_driving_ns
+                        || standing.is_some_and(|s| {
+                            now_ns.saturating_sub(lost.max(s)) >= self.grace_ns
+                        }) =>
                 {
                     self.stats.started += 1;
                     self.sweep_from(0, neck_yaw, now_ns)
@@ -426,12 +432,25 @@ mod tests {
             r.observe(false, true, 0.0, 5 * S),
             Action::Neck(_)
         ));
-        // Lost while driving, then the base stops: at once once lost_grace_s has passed.
+        // Lost while driving, then the base stops: lost_grace_s after it stopped (the planner
+        // may send it on first), or lost_grace_driving_s after the loss, whichever is first.
         let mut r = Recovery::new(&cfg());
         assert_eq!(r.observe(false, true, 0.0, 0), Action::None);
+        assert_eq!(r.observe(false, false, 0.0, 2 * S), Action::None);
         assert_eq!(r.observe(false, true, 0.0, 3 * S), Action::None);
+        assert_eq!(r.observe(false, false, 0.0, 3 * S), Action::None);
         assert!(matches!(
-            r.observe(false, false, 0.0, 3 * S),
+            r.observe(false, false, 0.0, 5 * S),
+            Action::Neck(_)
+        ));
+        // Standing: lost_grace_s from the newest loss.
+        let mut r = Recovery::new(&cfg());
+        assert_eq!(r.observe(false, false, 0.0, 0), Action::None);
+        assert_eq!(r.observe(true, false, 0.0, S), Action::None);
+        assert_eq!(r.observe(false, false, 0.0, 2 * S), Action::None);
+        assert_eq!(r.observe(false, false, 0.0, 3 * S), Action::None);
+        assert!(matches!(
+            r.observe(false, false, 0.0, 4 * S),
             Action::Neck(_)
         ));
     }
