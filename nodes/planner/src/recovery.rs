@@ -6,7 +6,8 @@
 //! is in charge or the recovery is, and what the neck and base do meanwhile.
 //!
 //! ```text
-//!      lost for lost_grace_s (stopped)             tracking holds
+//!   lost: lost_grace_s standing, or          tracking holds
+//!   lost_grace_driving_s in all
 //!  Idle ───────────────────────────▶ Sweep ────────────────────────▶ Hold ──(hold_s)──▶ Idle
 //!   ▲                                 │  ▲                            │ lost again
 //!   │                                 │  └────────────────────────────┘ (same sweep)

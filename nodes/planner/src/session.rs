@@ -549,13 +549,14 @@ impl Session {
         let action = self
             .recovery
             .observe(tracking(state), driving(state), state.neck_yaw, now_ns);
-        let driving = self
+        // The base's current goal is the recovery's drive.
+        let own_drive = self
             .goals
             .current
             .is_some_and(|g| g.kind == goal_kind::RECOVERY);
         match action {
             Action::None => {
-                if driving {
+                if own_drive {
                     self.goals.current = None;
                 }
                 None
@@ -579,7 +580,7 @@ impl Session {
             Action::Driving => {
                 // Over when the base is done with it, or when a goal of the planner (a job
                 // that came back meanwhile) superseded it.
-                if !driving || self.goals.poll(state) != Outcome::Pending {
+                if !own_drive || self.goals.poll(state) != Outcome::Pending {
                     self.recovery.drive_done(state.neck_yaw, now_ns);
                 }
                 Some(Step::Wait)
@@ -738,7 +739,7 @@ fn tracking(state: &RobotState) -> bool {
     state.localization_ok != 0
 }
 
-/// Whether the base is driving to a goal (the recovery waits longer then).
+/// Whether the base is driving to a goal (the recovery gives it `lost_grace_driving_s`).
 fn driving(state: &RobotState) -> bool {
     state.nav_status == nav_status::MOVING
 }
