@@ -101,6 +101,7 @@
 #define VPSOM_GOAL_KIND_GBV                0
 #define VPSOM_GOAL_KIND_COVERAGE           1
 #define VPSOM_GOAL_KIND_FRONTIER           2
+#define VPSOM_GOAL_KIND_RECOVERY           3
 #define VPSOM_MISS_CAUSE_NONE              0
 #define VPSOM_MISS_CAUSE_EXECUTION         1
 #define VPSOM_MISS_CAUSE_RUN_QUEUE         2

@@ -845,6 +845,8 @@ pub mod goal_kind {
     pub const COVERAGE: u8 = 1;
     /// Frontier of the frontier-exploration baseline.
     pub const FRONTIER: u8 = 2;
+    /// A drive of the localization recovery (any planner; see `[planner.recovery]`).
+    pub const RECOVERY: u8 = 3;
 }
 
 /// A chassis goal.
@@ -877,7 +879,7 @@ impl Validate for NavGoal {
         c.within("pose.yaw", &self.pose[2..], MAX_YAW_RAD)?;
         c.finite("score", &[self.score])?;
         c.cluster("cluster_id", self.cluster_id)?;
-        c.count("kind", self.kind as usize, goal_kind::FRONTIER as usize)
+        c.count("kind", self.kind as usize, goal_kind::RECOVERY as usize)
     }
 }
 

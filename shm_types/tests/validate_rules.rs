@@ -423,7 +423,7 @@ fn goal_ranges() {
     rejects(bad(|b| b.pose[2] = 13.0), "NavGoal", "pose.yaw", "13");
     rejects(bad(|b| b.score = f32::INFINITY), "NavGoal", "score", "inf");
     rejects(bad(|b| b.cluster_id = -7), "NavGoal", "cluster_id", "-7");
-    rejects(bad(|b| b.kind = 3), "NavGoal", "kind", "3");
+    rejects(bad(|b| b.kind = 4), "NavGoal", "kind", "4");
     assert_eq!(bad(|b| b.pose[2] = MAX_YAW_RAD), Ok(()));
 
     let n = NeckGoal {

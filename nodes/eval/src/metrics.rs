@@ -286,6 +286,15 @@ pub struct Metrics {
     /// Base path driven while the current chassis goal was a coverage waypoint, metres.
     #[serde(default)]
     pub path_coverage_m: Option<f64>,
+    /// Base path driven while the current chassis goal was a localization-recovery drive
+    /// (`[planner.recovery]`), metres.
+    #[serde(default)]
+    pub path_recovery_m: Option<f64>,
+    /// Localization recoveries the planner ran (tracking lost longer than
+    /// `planner.recovery.lost_grace_s`: a neck sweep, drives if it failed); null if the host did
+    /// not say.
+    #[serde(default)]
+    pub localization_recoveries: Option<u32>,
     /// How each ground-truth foreground object was seen (rendered frames in which it was in
     /// view), for finding where recall is lost: never in view, or in view but not mapped.
     #[serde(default)]
@@ -399,7 +408,8 @@ pub struct SessionLog {
     given_up: Vec<GivenUpEntry>,
     explored: Option<bool>,
     goal_kind: Option<u8>,
-    path_by_goal: Option<[f64; 3]>,
+    path_by_goal: Option<[f64; 4]>,
+    recoveries: Option<u32>,
     views: std::collections::BTreeMap<u32, (u64, u64, u32)>,
 }
 
@@ -502,7 +512,7 @@ impl SessionLog {
     /// driven from now on counts as that kind's (`path_gbv_m`, `path_explore_m`, ...).
     pub fn observe_goal(&mut self, kind: u8) {
         self.goal_kind = Some(kind);
-        self.path_by_goal.get_or_insert([0.0; 3]);
+        self.path_by_goal.get_or_insert([0.0; 4]);
     }
 
     /// The non-occlusion accumulated so far.
@@ -533,6 +543,11 @@ impl SessionLog {
     pub fn planner_outcome(&mut self, explored: bool, given_up: Vec<GivenUpEntry>) {
         self.explored = Some(explored);
         self.given_up = given_up;
+    }
+
+    /// Feed the number of localization recoveries the planner ran (`localization_recoveries`).
+    pub fn planner_recoveries(&mut self, recoveries: u32) {
+        self.recoveries = Some(recoveries);
     }
 
     /// Length of the true base path so far, metres.
@@ -605,6 +620,10 @@ impl SessionLog {
             path_coverage_m: self
                 .path_by_goal
                 .map(|p| p[usize::from(goal_kind::COVERAGE)]),
+            path_recovery_m: self
+                .path_by_goal
+                .map(|p| p[usize::from(goal_kind::RECOVERY)]),
+            localization_recoveries: self.recoveries,
             views: self.object_views(gt),
         }
     }

@@ -145,9 +145,9 @@ pub const HEALTH: [MetricDef; 5] = [
 ];
 
 /// Where the path goes and where recall is lost (not in the paper): the base path split by the
-/// kind of chassis goal being driven to, and the ground-truth foreground objects not correctly
+/// kind of chassis goal being driven to, the localization recoveries, and the ground-truth foreground objects not correctly
 /// mapped at the end, split by whether any frame showed them well (`metrics.json` `views`).
-pub const DIAGNOSIS: [MetricDef; 4] = [
+pub const DIAGNOSIS: [MetricDef; 5] = [
     MetricDef {
         key: "path_gbv_m",
         label: "Path to GBVs / coverage waypoints (m)",
@@ -164,6 +164,13 @@ pub const DIAGNOSIS: [MetricDef; 4] = [
         better: Better::Lower,
         decimals: 2,
         get: |m| m.path_explore_m,
+    },
+    MetricDef {
+        key: "localization_recoveries",
+        label: "Localization recoveries (lost > planner.recovery.lost_grace_s)",
+        better: Better::Lower,
+        decimals: 1,
+        get: |m| m.localization_recoveries.map(f64::from),
     },
     MetricDef {
         key: "missed_never_well_seen",

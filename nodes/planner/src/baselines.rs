@@ -123,7 +123,7 @@ impl ViewPlanner for CoveragePlanner {
     }
 
     fn next_goal(&mut self, inputs: &PlannerInputs<'_>, now_ns: u64) -> Step {
-        if let Some(step) = self.session.begin(inputs.map) {
+        if let Some(step) = self.session.begin(inputs, now_ns) {
             return step;
         }
         let current = self.session.goals.current;
@@ -211,6 +211,10 @@ impl ViewPlanner for CoveragePlanner {
 
     fn neck_goal(&mut self, map: &ObjectMap, state: &RobotState, now_ns: u64) -> NeckGoal {
         let mut goal = neck_goal_for(map, self.mount.pitch());
+        if let Some(yaw) = self.session.recovery_neck(state, now_ns) {
+            goal.yaw = yaw;
+            return goal;
+        }
         let centre = self.current.map(|c| c.center).or_else(|| {
             clusters::first_unfinished(
                 map,
@@ -267,8 +271,8 @@ impl ViewPlanner for FrontierPlanner {
         PlannerKind::Frontier
     }
 
-    fn next_goal(&mut self, inputs: &PlannerInputs<'_>, _now_ns: u64) -> Step {
-        if let Some(step) = self.session.begin(inputs.map) {
+    fn next_goal(&mut self, inputs: &PlannerInputs<'_>, now_ns: u64) -> Step {
+        if let Some(step) = self.session.begin(inputs, now_ns) {
             return step;
         }
         if self.session.goals.poll(inputs.state) == Outcome::Pending
@@ -286,8 +290,13 @@ impl ViewPlanner for FrontierPlanner {
         }
     }
 
-    fn neck_goal(&mut self, map: &ObjectMap, _state: &RobotState, _now_ns: u64) -> NeckGoal {
-        neck_goal_for(map, self.mount.pitch())
+    fn neck_goal(&mut self, map: &ObjectMap, state: &RobotState, now_ns: u64) -> NeckGoal {
+        let mut goal = neck_goal_for(map, self.mount.pitch());
+        // Forward, unless the localization recovery turns the neck.
+        if let Some(yaw) = self.session.recovery_neck(state, now_ns) {
+            goal.yaw = yaw;
+        }
+        goal
     }
 
     fn status(&self) -> PlannerStatus {

@@ -339,6 +339,48 @@ impl FrontierConfig {
     }
 }
 
+/// `[planner.recovery]`: what every planner does while visual localization is lost (see
+/// [`crate::recovery`]).
+#[derive(Debug, Clone, Copy, PartialEq, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct RecoveryConfig {
+    /// Whether the recovery runs at all.
+    pub enabled: bool,
+    /// Tracking lost, and the base standing (not driving to a goal), this long before the
+    /// recovery takes over, seconds.
+    pub lost_grace_s: f32,
+    /// Tracking lost this long, whatever the base does, before the recovery takes over, seconds.
+    pub lost_grace_driving_s: f32,
+    /// Neck stops of the 360° sweep (evenly spaced).
+    pub sweep_stops: usize,
+    /// Time at each stop from its command (the slew included), seconds.
+    pub stop_s: f32,
+    /// Tracking must hold this long, the neck still, before the planner resumes, seconds.
+    pub hold_s: f32,
+    /// Drive after a sweep that did not recover, metres.
+    pub move_m: f32,
+}
+
+impl Default for RecoveryConfig {
+    /// The `[planner.recovery]` section of the built-in `config/default.toml`.
+    fn default() -> Self {
+        settings::DEFAULTS.section("planner.recovery")
+    }
+}
+
+impl RecoveryConfig {
+    /// Range-check; `c` is at this table.
+    pub fn validate(&self, c: &Checker) -> Result<(), ConfigError> {
+        settings::ranges!(c, self, {
+            [lost_grace_s, lost_grace_driving_s]: in_range(0.0, 600.0),
+            sweep_stops: count(1, 360),
+            [stop_s, hold_s]: in_range(0.0, 60.0),
+            move_m: in_range(0.0, 10.0),
+        });
+        Ok(())
+    }
+}
+
 /// `[planner.give_up]`: when VP-SOM gives up an object whose entropy stops falling (see
 /// [`crate::giveup`]).
 #[derive(Debug, Clone, Copy, PartialEq, Deserialize)]
@@ -424,6 +466,8 @@ pub struct PlannerConfig {
     pub frontier: FrontierConfig,
     /// Giving up objects whose entropy stops falling.
     pub give_up: GiveUpConfig,
+    /// Recovery while localization is lost (every planner).
+    pub recovery: RecoveryConfig,
     /// Term switches.
     pub ablation: AblationConfig,
 }
@@ -455,7 +499,7 @@ impl PlannerConfig {
             fa_min_visible: in_range(0.0, 1.0),
             gbv: section,
             min_observations: count(0, 1_000_000),
-            [lbv, bootstrap, coverage, frontier, give_up]: section,
+            [lbv, bootstrap, coverage, frontier, give_up, recovery]: section,
         });
         Ok(())
     }

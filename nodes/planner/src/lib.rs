@@ -18,6 +18,7 @@
 //! | [`reach`] | inflated navigation grid, reachability (Dijkstra) and collision |
 //! | [`frontier`], [`coverage`] | baseline algorithms as jobs (frontiers: every planner's exploration) |
 //! | [`vpsom`], [`baselines`] | the three planners (state machines) |
+//! | [`recovery`] | what every planner does while localization is lost (neck sweep, drive) |
 //! | [`session`] | the interface: inputs, [`Step`], jobs, status, [`Summary`] |
 //! | [`synth`] | synthetic maps (scene-3-like) for benchmarks and tests |
 //!
@@ -53,6 +54,14 @@
 //! appears, or once its neighbourhood was seen on the way (`frontier.seen_radius`); VP-SOM's last
 //! GBV goal is superseded by exploration once no cluster needs it. The room is *explored* when a frontier round finds no reachable frontier.
 //!
+//! # Localization lost
+//! Every planner runs the same recovery ([`recovery`], `[planner.recovery]`), from the shared
+//! bookkeeping (`Session::begin` at the start of each `next_goal`, `Session::recovery_neck` at
+//! the start of each `neck_goal`): once `RobotState.localization_ok` has been 0 for
+//! `lost_grace_s` (at the start too), the planner waits and the neck sweeps 360° in stops until
+//! tracking holds, holds there for `hold_s`, then the planner resumes; a sweep that found nothing
+//! drives `move_m` away from the nearest obstacle (goal kind RECOVERY) and sweeps again.
+//!
 //! # Termination (section 3.4, Algorithm 2, plus exploration)
 //! A foreground object is done when `complete` is set or `h_sopm < eps_sopm`, or when VP-SOM
 //! gave it up ([`giveup`]: its entropy stopped falling, or its cluster ran out of GBV rounds or
@@ -81,6 +90,7 @@ pub mod gbv;
 pub mod giveup;
 pub mod lbv;
 pub mod reach;
+pub mod recovery;
 pub mod session;
 pub mod sight;
 pub mod synth;
@@ -90,12 +100,14 @@ pub mod vpsom;
 pub use baselines::{CoveragePlanner, FrontierPlanner};
 pub use config::{
     AblationConfig, BootstrapConfig, CoverageConfig, FaRelevance, FrontierConfig, GbvConfig,
-    GiveUpConfig, LbvConfig, Occluders, PlannerConfig, PlannerKind, UnknownPlanner, UnknownTerm,
+    GiveUpConfig, LbvConfig, Occluders, PlannerConfig, PlannerKind, RecoveryConfig, UnknownPlanner,
+    UnknownTerm,
 };
 pub use evaluate::{EvalParams, FaFilter, Target, Weights, evaluate_view, evaluate_view_in};
 pub use gbv::{GbvJob, GbvResult};
 pub use giveup::{GiveUpCause, GivenUpObject};
 pub use lbv::Lbv;
+pub use recovery::{Recovery, RecoveryStats};
 pub use session::{
     JobOutput, PlannerInputs, PlannerJob, PlannerStatus, Step, Summary, ViewPlanner,
 };

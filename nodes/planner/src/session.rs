@@ -1,7 +1,7 @@
 //! The planner interface shared by VP-SOM and the baselines: inputs, steps, jobs, status and
 //! summary, plus the bookkeeping every planner needs (`Session`: status, goal ids, the job in
 //! flight, reusable snapshot buffers, frontier exploration and whether the room is explored; the
-//! look-around).
+//! look-around; the localization recovery, [`crate::recovery`]).
 
 use crate::clusters::{self, SideTracker};
 use crate::config::{PlannerConfig, PlannerKind};
@@ -10,6 +10,7 @@ use crate::evaluate::{EvalParams, Scoring, Weights};
 use crate::frontier::{FrontierJob, FrontierParams, FrontierResult};
 use crate::gbv::{GbvJob, GbvResult};
 use crate::giveup::GivenUpObject;
+use crate::recovery::{Action, Recovery, RecoveryStats, escape_pose};
 use shm_types::{
     Candidate, NavGoal, NeckGoal, ObjectMap, OccupancyGrid, PlannerDecision, RobotState,
     boxed_zeroed, decision_kind, goal_kind, nav_status, planner_state,
@@ -87,6 +88,9 @@ pub struct Summary {
     pub objects_given_up: u32,
     /// Whether the room was explored: the last frontier round found no reachable frontier.
     pub explored: bool,
+    /// Localization recoveries (`[planner.recovery]`): started, ended with tracking back, full
+    /// sweeps that found nothing, drives.
+    pub recovery: RecoveryStats,
     /// Time the session ended, ns.
     pub finished_ns: Option<u64>,
 }
@@ -136,7 +140,8 @@ impl fmt::Display for Summary {
         write!(
             f,
             "{}: {:?}; goals {} ({} unreachable), rounds {}; clusters {}/{} done, {} given up; \
-             foreground {}/{} complete, {} given up; explored {}",
+             foreground {}/{} complete, {} given up; explored {}; localization recoveries {} \
+             ({} recovered, {} drives)",
             self.kind,
             self.status,
             self.goals_issued,
@@ -148,7 +153,10 @@ impl fmt::Display for Summary {
             self.foreground_done,
             self.foreground,
             self.objects_given_up,
-            self.explored
+            self.explored,
+            self.recovery.started,
+            self.recovery.recovered,
+            self.recovery.drives
         )
     }
 }
@@ -458,6 +466,8 @@ pub(crate) struct Session {
     pub(crate) score_frontiers: Option<(EvalParams, Weights)>,
     /// The trace of the newest chassis-goal decision, until the host takes it.
     pub(crate) decision: Option<Box<PlannerDecision>>,
+    /// The localization recovery (every planner).
+    recovery: Recovery,
     blacklist: Vec<[f32; 2]>,
     pending: bool,
     status: PlannerStatus,
@@ -483,6 +493,7 @@ impl Session {
             explored: false,
             score_frontiers: None,
             decision: None,
+            recovery: Recovery::new(&cfg.recovery),
             blacklist: Vec::new(),
             pending: false,
             status: PlannerStatus::Running,
@@ -499,6 +510,7 @@ impl Session {
                 foreground_done: 0,
                 objects_given_up: 0,
                 explored: false,
+                recovery: RecoveryStats::default(),
                 finished_ns: None,
             },
             jobs: 0,
@@ -506,11 +518,13 @@ impl Session {
     }
 
     /// The start of every `next_goal`: takes the map's counts for the summary, and returns the
-    /// step to return at once (`Finished` once the session is over, `Wait` while a job is out).
-    pub(crate) fn begin(&mut self, map: &ObjectMap) -> Option<Step> {
+    /// step to return at once (`Finished` once the session is over, `Wait` while a job is out,
+    /// the recovery's drive or `Wait` while localization is being recovered: [`Self::recover`]).
+    pub(crate) fn begin(&mut self, inputs: &PlannerInputs<'_>, now_ns: u64) -> Option<Step> {
         if self.status.is_finished() {
             return Some(Step::Finished(self.summary()));
         }
+        let map = inputs.map;
         let cl = clusters::clusters(map, self.eps_sopm, &self.sides, self.min_sides);
         let s = &mut self.summary;
         s.clusters = cl.len() as u32;
@@ -518,7 +532,68 @@ impl Session {
         let fg = map.objects().iter().filter(|o| !o.is_background());
         s.foreground = fg.clone().count() as u32;
         s.foreground_done = fg.filter(|o| clusters::fg_done(o, self.eps_sopm)).count() as u32;
-        self.pending.then_some(Step::Wait)
+        let recovering = self.recover(inputs, now_ns);
+        if self.pending {
+            return Some(Step::Wait);
+        }
+        recovering
+    }
+
+    /// The localization recovery's part of `next_goal`, the same for every planner: `None` while
+    /// tracking holds (the planner is in charge); else the planner waits (`Wait`), except for the
+    /// recovery's drive, issued here with the planner's goal ids (kind RECOVERY). Once the
+    /// recovery is over, a recovery goal still current is dropped so that the planner plans
+    /// afresh (its own goal, if one was superseded, is not waited for).
+    fn recover(&mut self, inputs: &PlannerInputs<'_>, now_ns: u64) -> Option<Step> {
+        let state = inputs.state;
+        let action = self
+            .recovery
+            .observe(tracking(state), driving(state), state.neck_yaw, now_ns);
+        // The base's current goal is the recovery's drive.
+        let own_drive = self
+            .goals
+            .current
+            .is_some_and(|g| g.kind == goal_kind::RECOVERY);
+        match action {
+            Action::None => {
+                if own_drive {
+                    self.goals.current = None;
+                }
+                None
+            }
+            Action::Neck(_) => Some(Step::Wait),
+            Action::Drive if self.pending => Some(Step::Wait),
+            Action::Drive => {
+                let nav = &self.frontier.nav;
+                match escape_pose(inputs.nav, nav, state, self.recovery.move_m) {
+                    Some(pose) => {
+                        self.recovery.drive_issued();
+                        let goal = self.goals.issue(pose, 0.0, -1, goal_kind::RECOVERY, now_ns);
+                        Some(Step::Goal(goal))
+                    }
+                    None => {
+                        self.recovery.drive_done(state.neck_yaw, now_ns);
+                        Some(Step::Wait)
+                    }
+                }
+            }
+            Action::Driving => {
+                // Over when the base is done with it, or when a goal of the planner (a job
+                // that came back meanwhile) superseded it.
+                if !own_drive || self.goals.poll(state) != Outcome::Pending {
+                    self.recovery.drive_done(state.neck_yaw, now_ns);
+                }
+                Some(Step::Wait)
+            }
+        }
+    }
+
+    /// The neck yaw while the recovery is in charge (every planner's `neck_goal` starts here):
+    /// `None` while tracking holds.
+    pub(crate) fn recovery_neck(&mut self, state: &RobotState, now_ns: u64) -> Option<f32> {
+        self.recovery
+            .observe(tracking(state), driving(state), state.neck_yaw, now_ns);
+        self.recovery.neck()
     }
 
     /// Hand a job to the host (one planning round).
@@ -653,9 +728,20 @@ impl Session {
             clusters_given_up: self.given_up.len() as u32,
             objects_given_up: self.objects_given_up,
             explored: self.explored,
+            recovery: self.recovery.stats(),
             ..self.summary
         }
     }
+}
+
+/// Whether visual localization tracks (the recovery's input).
+fn tracking(state: &RobotState) -> bool {
+    state.localization_ok != 0
+}
+
+/// Whether the base is driving to a goal (the recovery gives it `lost_grace_driving_s`).
+fn driving(state: &RobotState) -> bool {
+    state.nav_status == nav_status::MOVING
 }
 
 /// A job output back at its planner (see [`Session::job_back`]).
@@ -750,11 +836,11 @@ mod tests {
             nav: &grid,
             explore: &grid,
         };
-        assert!(s.begin(&map).is_none());
+        assert!(s.begin(&inputs, 0).is_none());
         let Step::Compute(job) = s.frontier_job(&inputs) else {
             panic!("a frontier job");
         };
-        assert!(matches!(s.begin(&map), Some(Step::Wait)), "job out");
+        assert!(matches!(s.begin(&inputs, 0), Some(Step::Wait)), "job out");
         // An empty exploration grid has no frontier: the room counts as explored.
         let back = s.job_back(job.run(), 7);
         assert!(matches!(back, Back::Explored));
@@ -767,10 +853,125 @@ mod tests {
             (PlannerStatus::Terminated, 1, Some(7), true)
         );
         assert_eq!(sum.reason(), "explored (no reachable frontier)");
-        assert!(matches!(s.begin(&map), Some(Step::Finished(_))));
+        assert!(matches!(s.begin(&inputs, 7), Some(Step::Finished(_))));
         assert!(
             s.buffers.explore.is_some() && s.buffers.nav.is_some(),
             "buffers reclaimed"
         );
+    }
+
+    /// Every planner, lost at the start in a 4 m room: it waits while the neck sweeps (the
+    /// recovery's stops), drives once a full sweep found nothing, sweeps again after the drive,
+    /// and plans again once tracking holds.
+    #[test]
+    fn every_planner_recovers_the_same_way() {
+        use crate::config::PlannerKind;
+        use geom::CameraConfig;
+        use shm_types::grid_cell;
+        let mut nav = boxed_zeroed::<OccupancyGrid>();
+        (nav.resolution, nav.width, nav.height) = (0.1, 40, 40);
+        for iy in 0..40usize {
+            for ix in 0..40usize {
+                if ix.min(iy).min(39 - ix).min(39 - iy) <= 3 {
+                    nav.cells[iy * 40 + ix] = grid_cell::OCCUPIED;
+                }
+            }
+        }
+        let mut explore = boxed_zeroed::<OccupancyGrid>();
+        (explore.resolution, explore.width, explore.height) = (0.1, 40, 40);
+        explore.cells[..1600].fill(grid_cell::UNKNOWN);
+        let map = boxed_zeroed::<ObjectMap>();
+        let ms = 1_000_000u64;
+        for kind in [
+            PlannerKind::Vpsom,
+            PlannerKind::Coverage,
+            PlannerKind::Frontier,
+        ] {
+            let cfg = PlannerConfig {
+                kind,
+                ..PlannerConfig::default()
+            };
+            let r = cfg.recovery;
+            let mut p = crate::make_planner(&cfg, &CameraConfig::default());
+            // 0.7 m from the north wall's inner face (y = 3.6), facing it; lost.
+            let mut state = RobotState {
+                base_pose: [2.0, 2.9, std::f32::consts::FRAC_PI_2],
+                ..Default::default()
+            };
+            let mut necks = Vec::new();
+            let mut drive = None;
+            let mut t = 0;
+            while t < 30_000 * ms {
+                let neck = p.neck_goal(&map, &state, t);
+                state.neck_yaw = neck.yaw; // the neck follows at once
+                if necks.last() != Some(&neck.yaw) {
+                    necks.push(neck.yaw);
+                }
+                let inputs = PlannerInputs {
+                    map: &map,
+                    state: &state,
+                    nav: &nav,
+                    explore: &explore,
+                };
+                let mut step = p.next_goal(&inputs, t);
+                while let Step::Compute(job) = step {
+                    step = p.job_done(job.run(), t);
+                }
+                match step {
+                    Step::Goal(g) => {
+                        assert_eq!(g.kind, goal_kind::RECOVERY, "{kind}: {g:?}");
+                        drive = Some((g, t));
+                        break;
+                    }
+                    Step::Finished(s) => panic!("{kind}: {s}"),
+                    _ => {}
+                }
+                t += 50 * ms;
+            }
+            let (goal, at) = drive.unwrap_or_else(|| panic!("{kind}: no drive"));
+            // After the grace time and a full sweep of sweep_stops stops.
+            let sweep = r.lost_grace_s + r.sweep_stops as f32 * r.stop_s;
+            assert!((at as f32 * 1e-9 - sweep).abs() < 0.2, "{kind}: {at}");
+            assert!(necks.len() > r.sweep_stops, "{kind}: {necks:?}");
+            assert!(
+                goal.pose[1] < 2.4 && goal.pose[2] < 0.0,
+                "{kind}: away from the wall, facing the room: {goal:?}"
+            );
+            let s = p.summary();
+            assert_eq!((s.recovery.failed_sweeps, s.recovery.drives), (1, 1));
+            // The drive is reached: a new sweep (the planner still waits).
+            state.nav_goal_id = goal.goal_id;
+            state.nav_status = nav_status::REACHED;
+            state.base_pose = goal.pose;
+            let inputs = PlannerInputs {
+                map: &map,
+                state: &state,
+                nav: &nav,
+                explore: &explore,
+            };
+            assert!(matches!(p.next_goal(&inputs, at + 100 * ms), Step::Wait));
+            // Tracking holds: hold_s later the planner plans again (a frontier round: the grid
+            // is still unknown, so it waits for frames; VP-SOM and coverage look around).
+            state.localization_ok = 1;
+            let held = at + 200 * ms + (f64::from(r.hold_s) * 1e9) as u64;
+            let mut t = at + 200 * ms;
+            while t <= held + 100 * ms {
+                let inputs = PlannerInputs {
+                    map: &map,
+                    state: &state,
+                    nav: &nav,
+                    explore: &explore,
+                };
+                p.neck_goal(&map, &state, t);
+                if let Step::Compute(job) = p.next_goal(&inputs, t) {
+                    assert!(t >= held, "{kind}: planned while the neck held");
+                    assert!(!matches!(p.job_done(job.run(), t), Step::Finished(_)));
+                }
+                t += 50 * ms;
+            }
+            let s = p.summary();
+            assert_eq!((s.recovery.started, s.recovery.recovered), (1, 1), "{kind}");
+            assert_eq!(s.goals_issued, 1, "{kind}: only the drive");
+        }
     }
 }

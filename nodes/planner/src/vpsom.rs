@@ -255,7 +255,7 @@ impl ViewPlanner for VpsomPlanner {
     }
 
     fn next_goal(&mut self, inputs: &PlannerInputs<'_>, now_ns: u64) -> Step {
-        if let Some(step) = self.session.begin(inputs.map) {
+        if let Some(step) = self.session.begin(inputs, now_ns) {
             return step;
         }
         let map = inputs.map;
@@ -353,6 +353,14 @@ impl ViewPlanner for VpsomPlanner {
     }
 
     fn neck_goal(&mut self, map: &ObjectMap, state: &RobotState, now_ns: u64) -> NeckGoal {
+        if let Some(yaw) = self.session.recovery_neck(state, now_ns) {
+            // Localization lost: the recovery turns the neck (no LBV, no sides observed).
+            self.last_lbv = None;
+            return NeckGoal {
+                yaw,
+                ..neck_goal_for(map, self.mount.pitch())
+            };
+        }
         let pose = self
             .mount
             .camera_pose(state.base_pose, state.neck_yaw, state.neck_pitch);

@@ -279,6 +279,7 @@ fn session(
         summary.explored,
         given_up_entries(&planner.given_up_objects()),
     );
+    log.planner_recoveries(summary.recovery.started);
     let gt = ground_truth(&spec.scene);
     let run = RunInfo {
         scene: spec.scene.name.clone(),

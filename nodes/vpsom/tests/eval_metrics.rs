@@ -300,6 +300,8 @@ fn metrics_json_has_the_design_keys() {
         "path_gbv_m",
         "path_explore_m",
         "path_coverage_m",
+        "path_recovery_m",
+        "localization_recoveries",
         "views",
     ];
     assert_eq!(keys.len(), REQUIRED_KEYS.len() + extras.len(), "{keys:?}");

@@ -67,6 +67,7 @@ fn lbv_and_neck_goal_do_not_allocate_after_warm_up() {
     let mut state = RobotState {
         base_pose: [-0.3, 0.2, std::f32::consts::PI],
         neck_pitch: cam.mount.pitch(),
+        localization_ok: 1,
         ..Default::default()
     };
     // Warm-up.

@@ -439,7 +439,7 @@ pub(super) fn constants() -> Vec<Constant> {
         nav_status: [IDLE, MOVING, REACHED, UNREACHABLE],
         sopm_shape: [CYLINDER, HEMISPHERE, SPHERE],
         grid_cell: [FREE, OCCUPIED, UNKNOWN],
-        goal_kind: [GBV, COVERAGE, FRONTIER],
+        goal_kind: [GBV, COVERAGE, FRONTIER, RECOVERY],
         miss_cause: [NONE, EXECUTION, RUN_QUEUE, LATE_WAKEUP, BLOCKED, UNKNOWN],
         decision_kind: [GBV, LBV],
         planner_state: [RUNNING, TERMINATED, NO_CANDIDATES],

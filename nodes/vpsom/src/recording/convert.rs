@@ -500,6 +500,7 @@ pub fn nav_goal(g: &NavGoal) -> own::NavGoal {
         kind: match g.kind {
             goal_kind::COVERAGE => "coverage",
             goal_kind::FRONTIER => "frontier",
+            goal_kind::RECOVERY => "recovery",
             _ => "gbv",
         }
         .into(),
