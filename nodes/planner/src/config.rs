@@ -364,7 +364,7 @@ pub struct RecoveryConfig {
 impl Default for RecoveryConfig {
     /// The `[planner.recovery]` section of the built-in `config/default.toml`.
     fn default() -> Self {
-        settings::DEFAULTS.section("planner.recovery")
+        crate::DEFAULTS.section("planner.recovery")
     }
 }
 
