@@ -195,8 +195,13 @@ mod tests {
     fn lookalike_groups() {
         let g = ClassGroups::new(&crate::AssociationConfig::default().lookalike);
         let id = |n| class_id(n).unwrap();
-        assert!(g.compatible(id("cup"), id("vase")));
-        assert!(g.compatible(id("book"), id("keyboard")));
+        assert!(g.compatible(id("cup"), id("bowl")));
+        assert!(g.compatible(id("mouse"), id("remote")));
+        assert!(
+            !g.compatible(id("cup"), id("vase")),
+            "vase is COCO 'indoor'"
+        );
+        assert!(!g.compatible(id("book"), id("keyboard")));
         assert!(!g.compatible(id("cup"), id("book")));
         assert!(!g.compatible(id("chair"), id("dining table")));
         assert!(g.compatible(id("chair"), id("chair")));

@@ -75,10 +75,10 @@ fn near(m: &Mapper, p: Vec3, r: f32) -> Vec<shm_types::ClassId> {
 #[test]
 fn a_confusion_outside_the_lookalikes_joins_the_object_and_the_label_follows_the_votes() {
     let cup = Vec3::new(0.30, 0.0, 0.80);
-    let (cup_id, bowl_id) = (class_id("cup").unwrap(), class_id("bowl").unwrap());
-    // "bowl" is outside the default look-alike groups: the confusion is a label the mapper
+    let (cup_id, vase_id) = (class_id("cup").unwrap(), class_id("vase").unwrap());
+    // "vase" is outside the default look-alike groups: the confusion is a label the mapper
     // cannot know. Three confused views first, then six right ones.
-    let joined = run(true, 3, 9, "bowl");
+    let joined = run(true, 3, 9, "vase");
     let at_cup = near(&joined, cup, 0.06);
     assert_eq!(at_cup, vec![cup_id], "one object at the cup, labelled cup");
     // The neighbouring bottle (4 cm away) is not swallowed.
@@ -87,15 +87,15 @@ fn a_confusion_outside_the_lookalikes_joins_the_object_and_the_label_follows_the
         near(&joined, bottle, 0.05).contains(&class_id("bottle").unwrap()),
         "bottle kept"
     );
-    // Before the right views outvote it, the object is the bowl (first detections), and the
+    // Before the right views outvote it, the object is the vase (first detections), and the
     // cup's detections joined it rather than founding a second object.
-    let early = run(true, 3, 4, "bowl");
-    assert_eq!(near(&early, cup, 0.06), vec![bowl_id]);
+    let early = run(true, 3, 4, "vase");
+    assert_eq!(near(&early, cup, 0.06), vec![vase_id]);
     // Without the extension the confusion founds a second object on the cup.
-    let split = run(false, 3, 9, "bowl");
+    let split = run(false, 3, 9, "vase");
     let at_cup = near(&split, cup, 0.06);
     assert!(
-        at_cup.contains(&cup_id) && at_cup.contains(&bowl_id),
+        at_cup.contains(&cup_id) && at_cup.contains(&vase_id),
         "{at_cup:?}"
     );
 }
