@@ -23,8 +23,8 @@ use shm_types::{
     Candidate, DeadlineEvent, DepthFrame, Detection, Detections, FrameVisibility, Intrinsics,
     MAX_CANDIDATES, MAX_DETECTIONS, MAX_GRID_CELLS, MAX_HEIGHT, MAX_OBJECT_POINTS, MAX_OBJECTS,
     MAX_SOPM_CELLS, MAX_WIDTH, NavGoal, NeckGoal, NodeHealth, ObjectMap, OccupancyGrid,
-    PlannerDecision, Pose3, RobotState, Validate, ZeroValid, boxed_zeroed, class_name, grid_cell,
-    mask_mode, miss_cause,
+    PlannerDecision, Pose3, RobotState, Validate, ZeroValid, boxed_zeroed, class_name, goal_kind,
+    grid_cell, mask_mode, miss_cause,
 };
 use std::collections::HashMap;
 use std::sync::{LazyLock, Mutex};
@@ -463,7 +463,7 @@ fn grid_ok(g: &OccupancyGrid) {
 fn nav_goal_ok(g: &NavGoal) {
     finite("pose", &g.pose);
     finite("score", &[g.score]);
-    assert!(g.kind <= 2 && g.cluster_id >= -1);
+    assert!(g.kind <= goal_kind::RECOVERY && g.cluster_id >= -1);
 }
 
 fn neck_goal_ok(g: &NeckGoal) {
