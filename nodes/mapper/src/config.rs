@@ -76,6 +76,8 @@ pub struct MapperConfig {
     pub grid: GridConfig,
     /// Frame-to-map registration of the camera pose ([`super::register`]).
     pub registration: RegistrationConfig,
+    /// Floor levelling of the camera pose ([`super::level`]).
+    pub level: super::level::LevelConfig,
     /// Footprint sizes from per-view extents (`[mapper.extensions] view_extents`).
     pub view_extents: super::extent::ViewExtentConfig,
 }
@@ -455,7 +457,7 @@ impl MapperConfig {
             cross_merge_iou: in_range(0.01, 1.0),
             distinct_after: count(1, 1_000_000),
             [view_extents, flat, sparse, existence, segmentation, association, sopm]: section,
-            [registration, grid]: section,
+            [registration, grid, level]: section,
         });
         Ok(())
     }

@@ -41,6 +41,9 @@ pub struct ViewExtentConfig {
     /// Quantile over the views' extents taken as the size (0.5: median; higher leans to the
     /// views that saw more of the object: occlusion, dropout and trimming only shorten a view).
     pub view_quantile: f32,
+    /// The height too: each view's robust height, fused like the footprint (the cuboid keeps
+    /// its bottom on the supporting plane); `false`: the merged cloud's height.
+    pub height: bool,
 }
 
 impl Default for ViewExtentConfig {
@@ -73,6 +76,8 @@ struct View {
     los: Vec2,
     /// Subsampled points (xy only).
     pts: Vec<Vec2>,
+    /// Robust height of the view's points (`point_quantile` to 1 − it), metres.
+    height: f32,
 }
 
 /// The views of one object.
@@ -111,7 +116,10 @@ impl ViewExtents {
         let pts: Vec<Vec2> = (0..k)
             .map(|i| points[i * points.len() / k].truncate())
             .collect();
-        let view = View { los, pts };
+        let mut z: Vec<f32> = points.iter().map(|p| p.z).collect();
+        let q = cfg.point_quantile;
+        let height = quantile(&mut z, 1.0 - q) - quantile(&mut z, q);
+        let view = View { los, pts, height };
         if self.views.len() < cfg.max_views as usize {
             self.views.push(view);
         } else if let Some(slot) = self
@@ -158,14 +166,29 @@ impl ViewExtents {
         })
     }
 
+    /// Fused height: the `view_quantile` of the views' heights (every view sees the height),
+    /// `None` with fewer than `min_views` views.
+    pub fn fused_height(&self, cfg: &ViewExtentConfig) -> Option<f32> {
+        let mut h: Vec<f32> = self.views.iter().map(|v| v.height).collect();
+        (h.len() >= cfg.min_views.max(1) as usize).then(|| quantile(&mut h, cfg.view_quantile))
+    }
+
     /// The published size: the fused footprint extents where known, never larger than the
-    /// merged cloud's `size` (z is kept).
-    pub fn size(&self, size: Vec3, yaw: f32, cfg: &ViewExtentConfig) -> Vec3 {
+    /// merged cloud's `size`; with `cfg.height` the height likewise, from the views' heights
+    /// plus `bottom_gap` (the band above the supporting plane that extraction removes from
+    /// every view).
+    pub fn size(&self, size: Vec3, yaw: f32, bottom_gap: f32, cfg: &ViewExtentConfig) -> Vec3 {
         let [x, y] = self.fused(yaw, cfg);
+        let z = if cfg.height {
+            self.fused_height(cfg)
+                .map_or(size.z, |h| (h + bottom_gap).min(size.z))
+        } else {
+            size.z
+        };
         Vec3::new(
             x.map_or(size.x, |v| v.min(size.x)),
             y.map_or(size.y, |v| v.min(size.y)),
-            size.z,
+            z,
         )
     }
 }
@@ -183,6 +206,7 @@ mod tests {
             border_px: 2.0,
             point_quantile: 0.0,
             view_quantile: 0.5,
+            height: false,
         }
     }
 
@@ -226,11 +250,44 @@ mod tests {
             e.record(&pts, cam, &cfg());
         }
         let merged = merged_hi - merged_lo;
-        let size = e.size(merged.extend(0.1), 0.0, &cfg());
+        let size = e.size(merged.extend(0.1), 0.0, 0.0, &cfg());
         assert!(merged.x > 0.25 && merged.y > 0.15, "merged {merged}");
         assert!((size.x - 0.2).abs() < 1e-3, "{size}");
         assert!((size.y - 0.1).abs() < 1e-3, "{size}");
         assert_eq!(size.z, 0.1);
+    }
+
+    #[test]
+    fn fused_height_ignores_the_height_error_between_views() {
+        // A 0.12 m tall object seen from 6 views, each placed with its own height error of up
+        // to ±3 cm, its lowest 1.5 cm removed (the support band): the merged cloud spans
+        // 0.015 - 0.03 .. 0.12 + 0.03, each view 0.105.
+        let c = ViewExtentConfig {
+            height: true,
+            ..cfg()
+        };
+        let mut e = ViewExtents::default();
+        let mut merged = (f32::INFINITY, f32::NEG_INFINITY);
+        for k in 0..6 {
+            let dz = 0.03 * (k as f32 * 1.3).sin();
+            let (mut pts, cam) = view_points(60.0 * k as f32, Vec2::ZERO);
+            let n = pts.len();
+            for (i, p) in pts.iter_mut().enumerate() {
+                p.z = 0.8 + dz + 0.015 + 0.105 * i as f32 / (n - 1) as f32;
+                merged = (merged.0.min(p.z), merged.1.max(p.z));
+            }
+            e.record(&pts, cam, &c);
+        }
+        let merged_h = merged.1 - 0.8 + 0.03;
+        assert!(merged_h > 0.17, "{merged_h}");
+        let size = e.size(Vec3::new(0.2, 0.1, merged_h), 0.0, 0.015, &c);
+        assert!((size.z - 0.12).abs() < 1e-3, "{size}");
+        // Never taller than the merged cloud; off: the merged height.
+        assert_eq!(e.size(Vec3::new(0.2, 0.1, 0.05), 0.0, 0.015, &c).z, 0.05);
+        assert_eq!(
+            e.size(Vec3::new(0.2, 0.1, merged_h), 0.0, 0.015, &cfg()).z,
+            merged_h
+        );
     }
 
     #[test]
@@ -244,7 +301,7 @@ mod tests {
         let [x, y] = e.fused(0.0, &cfg());
         assert_eq!(x, None);
         assert!((y.unwrap() - 0.1).abs() < 1e-3);
-        let size = e.size(Vec3::new(0.3, 0.2, 0.1), 0.0, &cfg());
+        let size = e.size(Vec3::new(0.3, 0.2, 0.1), 0.0, 0.0, &cfg());
         assert_eq!(size.x, 0.3);
     }
 

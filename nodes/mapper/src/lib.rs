@@ -64,6 +64,7 @@ pub mod existence;
 pub mod extent;
 mod flat;
 pub mod grid;
+pub mod level;
 mod merge;
 pub mod object;
 pub mod points;
@@ -151,6 +152,8 @@ pub struct FrameStats {
     pub merged: u32,
     /// Objects deleted because their existence fell below the threshold.
     pub deleted: u32,
+    /// The pose was levelled on the floor (`[mapper.level]`).
+    pub levelled: bool,
 }
 
 impl std::ops::AddAssign for FrameStats {
@@ -177,6 +180,8 @@ pub struct Mapper {
     next_id: u32,
     grid: ExplorationGrid,
     reg: register::Registration,
+    /// Floor-levelling scratch: candidate floor points.
+    level_scratch: Vec<glam::DVec3>,
     last_frame_seq: u64,
     last_frame_stamp_ns: u64,
     last_sim_time_ns: u64,
@@ -218,6 +223,7 @@ impl Mapper {
             next_id: 1,
             grid: ExplorationGrid::new(&cfg.grid),
             reg: register::Registration::default(),
+            level_scratch: Vec::new(),
             last_frame_seq: 0,
             last_frame_stamp_ns: 0,
             last_sim_time_ns: 0,
@@ -346,9 +352,22 @@ impl Mapper {
             height: frame.height,
             k: frame.intrinsics,
         };
-        let mut pose = self
-            .reg
-            .begin_frame(&pose_to_affine(&frame.camera_pose), &self.cfg.registration);
+        let mut pose = pose_to_affine(&frame.camera_pose);
+        if self.cfg.level.enabled {
+            let fit = level::fit_floor(
+                frame,
+                |u, v, z| camera.unproject(u, v, z),
+                &pose,
+                &self.cfg.level,
+                &mut self.level_scratch,
+            );
+            let corr = fit.and_then(|f| f.correction(pose.translation.into(), &self.cfg.level));
+            if let Some(c) = corr {
+                pose = c * pose;
+                stats.levelled = true;
+            }
+        }
+        let mut pose = self.reg.begin_frame(&pose, &self.cfg.registration);
         let mut cam_pos: Vec3 = pose.translation.into();
         self.grid.integrate(frame, &camera, &pose);
 

@@ -53,10 +53,14 @@ impl Mapper {
             m.id = o.id;
             m.class_id = o.class_id;
             m.background = o.background as u8;
-            m.center = o.cuboid.center.to_array();
             // Clamped: a flat cuboid's extent can round to -1e-6 (more far from the origin),
             // and a negative size fails `ObjectMap` validation, which drops the whole map.
-            m.size = self.published_size(o).max(Vec3::ZERO).to_array();
+            let size = self.published_size(o).max(Vec3::ZERO);
+            // A fused height keeps the bottom (on the supporting plane) and lowers the top.
+            let mut center = o.cuboid.center;
+            center.z -= 0.5 * (o.cuboid.size.z - size.z).max(0.0);
+            m.center = center.to_array();
+            m.size = size.to_array();
             m.yaw = o.cuboid.yaw;
             m.point_count = o.point_count;
             m.cluster_id = cluster_id;
@@ -100,13 +104,18 @@ impl Mapper {
     }
 
     /// The size an object is published with: with `[mapper.extensions] view_extents` a
-    /// foreground object's footprint comes from its per-view extents ([`super::extent`]).
+    /// foreground object's footprint (and, with `[mapper.view_extents] height`, its height)
+    /// comes from its per-view extents ([`super::extent`]).
     pub fn published_size(&self, o: &MappedObject) -> Vec3 {
         if o.background || !self.cfg.extensions.view_extents {
             return o.cuboid.size;
         }
-        o.views
-            .size(o.cuboid.size, o.cuboid.yaw, &self.cfg.view_extents)
+        o.views.size(
+            o.cuboid.size,
+            o.cuboid.yaw,
+            self.cfg.support_margin,
+            &self.cfg.view_extents,
+        )
     }
 
     /// Background object supporting a foreground object: its footprint (grown by 5 cm) holds the

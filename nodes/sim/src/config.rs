@@ -380,6 +380,9 @@ pub struct SlamConfig {
     pub loop_min_travel_m: f32,
     /// Keyframes kept (storage preallocated; later places are not stored).
     pub max_keyframes: u32,
+    /// The error has its out-of-plane part (`[z, roll, pitch]`); `false`: planar error only
+    /// (a switch for the pose ablation, not a rate).
+    pub out_of_plane: bool,
 }
 
 impl Default for SlamConfig {

@@ -306,7 +306,11 @@ impl SlamEstimator {
         // Out of the plane: no odometry to fuse with, the estimate is the measurement.
         let tilt_noise = Vector3::new(self.normal(), self.normal(), self.normal());
         let tilt_sd = Vector3::new(sd[0], sd[2], sd[2]);
-        self.tilt = self.map_tilt + tilt_sd.component_mul(&tilt_noise);
+        self.tilt = if self.cfg.out_of_plane {
+            self.map_tilt + tilt_sd.component_mul(&tilt_noise)
+        } else {
+            Vector3::zeros()
+        };
         let mut innovation = z - self.x;
         innovation[2] = wrap(innovation[2]);
         let Some(s_inv) = (self.p + self.r).try_inverse() else {

@@ -128,6 +128,10 @@ fn run_one(session: &SessionSpec, out: &Path) -> RunOutcome {
 /// The table `--sensitivity` writes into the output directory.
 pub const SENSITIVITY_FILE: &str = "sensitivity.md";
 
+/// The table `--pose-ablation` writes into the output directory (same columns as
+/// [`sensitivity_table`]; the deltas are against the default pose errors).
+pub const POSE_ABLATION_FILE: &str = "pose-ablation.md";
+
 /// Mean P, R, IoU and CDE per label over the finished runs, and each `<planner>@<variant>`
 /// label's change from its `<planner>` (Markdown).
 pub fn sensitivity_table(outcomes: &[RunOutcome]) -> String {

@@ -26,6 +26,7 @@ pub mod config;
 pub mod deploy;
 pub mod gridpng;
 pub mod lockstep;
+pub mod orbit;
 pub mod recording;
 pub mod replay;
 pub mod sensing;

@@ -53,6 +53,9 @@ pub enum SessionError {
     /// Unknown sensing variant in a label.
     #[error(transparent)]
     Variant(#[from] crate::variants::UnknownVariant),
+    /// The orbit experiment cannot run on this scene.
+    #[error("orbit: {0}")]
+    Orbit(String),
 }
 
 /// What to run.

@@ -30,6 +30,9 @@ enum Command {
     /// Measure the simulated sensing on a scripted tour: detector recall, false positives, box
     /// IoU, confusion, invalid depth, pose ATE/RPE; prints a table, writes sensing.json.
     Sensing(SensingCmd),
+    /// The orbit experiment: circle one object cluster for some laps (no planner; the neck
+    /// points at the cluster), scoring the map after each lap; prints the table, writes orbit.md.
+    Orbit(OrbitCmd),
     /// Scene files: generate random rooms (`vpsom scene gen --seed N --out FILE`).
     #[command(subcommand)]
     Scene(SceneCmd),
@@ -190,6 +193,11 @@ struct BenchCmd {
     /// with each sensing group made twice as bad, one at a time; writes sensitivity.md.
     #[arg(long, conflicts_with = "ablation")]
     sensitivity: bool,
+    /// Pose ablation: the planners (default: vpsom only) under the default sensing, with every
+    /// pose-error source off, and with each source alone (odometry, SLAM residual, map drift,
+    /// the SLAM's 6-DoF part, neck bias, neck noise, stamp delay); writes pose-ablation.md.
+    #[arg(long, conflicts_with_all = ["ablation", "sensitivity"])]
+    pose_ablation: bool,
 }
 
 #[derive(Debug, Subcommand)]
@@ -222,6 +230,29 @@ struct SensingCmd {
     frames: Option<u64>,
     /// Output directory.
     #[arg(long, default_value = "results/sensing")]
+    out: PathBuf,
+}
+
+#[derive(Debug, Args)]
+struct OrbitCmd {
+    /// Scene: a built-in name or a scene file.
+    #[arg(long, default_value = "paper-scene-1")]
+    scene: String,
+    /// Seed of the simulator.
+    #[arg(long, default_value_t = 1)]
+    seed: u64,
+    /// Laps around the cluster.
+    #[arg(long, default_value_t = 3)]
+    laps: u32,
+    /// Waypoints per lap.
+    #[arg(long, default_value_t = 16)]
+    waypoints: u32,
+    /// A sensing variant applied to the configuration (a bench label's `@<variant>`, e.g.
+    /// `pose-off`).
+    #[arg(long)]
+    variant: Option<String>,
+    /// Output directory (orbit.md).
+    #[arg(long, default_value = "results/orbit")]
     out: PathBuf,
 }
 
@@ -278,6 +309,7 @@ fn main() -> ExitCode {
         Command::Run(cmd) => run(config, cmd),
         Command::Bench(cmd) => bench_cmd(config, cmd),
         Command::Sensing(cmd) => sensing_cmd(config, cmd),
+        Command::Orbit(cmd) => orbit_cmd(config, cmd),
         Command::Scene(cmd) => scene_cmd(config, cmd),
         Command::Report { dirs, out } => report(&dirs, out),
         Command::Trace(cmd) => trace(cmd),
@@ -489,16 +521,21 @@ fn bench_cmd(config: Option<PathBuf>, cmd: BenchCmd) -> anyhow::Result<ExitCode>
     }
     let mut planners = if !cmd.planners.is_empty() {
         cmd.planners
-    } else if cmd.sensitivity {
+    } else if cmd.sensitivity || cmd.pose_ablation {
         vec!["vpsom".into()]
     } else {
         vec!["vpsom".into(), "coverage".into(), "frontier".into()]
     };
-    if cmd.sensitivity {
-        let base: Vec<String> = planners.clone();
-        for v in vpsom::variants::SENSITIVITY {
-            planners.extend(base.iter().map(|p| format!("{p}@{v}")));
-        }
+    let variants: &[&str] = if cmd.sensitivity {
+        &vpsom::variants::SENSITIVITY
+    } else if cmd.pose_ablation {
+        &vpsom::variants::POSE_ABLATION
+    } else {
+        &[]
+    };
+    let base_planners: Vec<String> = planners.clone();
+    for v in variants {
+        planners.extend(base_planners.iter().map(|p| format!("{p}@{v}")));
     }
     if cmd.ablation {
         planners.extend(
@@ -534,11 +571,18 @@ fn bench_cmd(config: Option<PathBuf>, cmd: BenchCmd) -> anyhow::Result<ExitCode>
     );
     let start = std::time::Instant::now();
     let outcomes = bench::run_bench(&spec)?;
-    if cmd.sensitivity {
-        let file = spec.out.join(bench::SENSITIVITY_FILE);
+    let table = if cmd.sensitivity {
+        Some(bench::SENSITIVITY_FILE)
+    } else if cmd.pose_ablation {
+        Some(bench::POSE_ABLATION_FILE)
+    } else {
+        None
+    };
+    if let Some(table) = table {
+        let file = spec.out.join(table);
         std::fs::write(&file, bench::sensitivity_table(&outcomes))
             .with_context(|| format!("writing {}", file.display()))?;
-        println!("sensitivity: {}", file.display());
+        println!("{table}: {}", file.display());
     }
     let failed: Vec<_> = outcomes.iter().filter(|o| o.result.is_err()).collect();
     for f in &failed {
@@ -559,6 +603,41 @@ fn bench_cmd(config: Option<PathBuf>, cmd: BenchCmd) -> anyhow::Result<ExitCode>
     } else {
         ExitCode::FAILURE
     })
+}
+
+fn orbit_cmd(config: Option<PathBuf>, cmd: OrbitCmd) -> anyhow::Result<ExitCode> {
+    let mut base = load_config(config.as_deref())?;
+    if let Some(v) = &cmd.variant {
+        vpsom::variants::apply(&mut base, v)?;
+    }
+    let b = base.bench;
+    let spec = vpsom::orbit::OrbitSpec {
+        scene: load_scene(&cmd.scene)?,
+        config: base.with_camera(b.camera_width, b.camera_height, b.camera_hz),
+        seed: cmd.seed,
+        laps: cmd.laps,
+        waypoints: cmd.waypoints,
+    };
+    anyhow::ensure!(cmd.laps > 0, "--laps must be > 0");
+    let r = vpsom::orbit::run_orbit(&spec)?;
+    let table = r.table();
+    println!("{table}");
+    let bad = r.regressions(0.02, 0.0);
+    let verdict = if bad.is_empty() {
+        "every object with ≥ 50 visible px: IoU after the last lap ≥ the first's − 0.02, centre error not grown\n".to_string()
+    } else {
+        format!(
+            "worse after the last lap than after the first:\n- {}\n",
+            bad.join("\n- ")
+        )
+    };
+    println!("{verdict}");
+    std::fs::create_dir_all(&cmd.out).with_context(|| format!("creating {}", cmd.out.display()))?;
+    let file = cmd.out.join("orbit.md");
+    std::fs::write(&file, format!("{table}\n{verdict}"))
+        .with_context(|| format!("writing {}", file.display()))?;
+    println!("orbit: {}", file.display());
+    Ok(ExitCode::SUCCESS)
 }
 
 fn sensing_cmd(config: Option<PathBuf>, cmd: SensingCmd) -> anyhow::Result<ExitCode> {
