@@ -78,6 +78,8 @@ pub struct MapperConfig {
     pub registration: RegistrationConfig,
     /// Floor levelling of the camera pose ([`super::level`]).
     pub level: super::level::LevelConfig,
+    /// Online calibration of a constant camera-yaw offset ([`super::calib`]).
+    pub yaw_calibration: super::calib::YawCalibrationConfig,
     /// Footprint sizes from per-view extents (`[mapper.extensions] view_extents`).
     pub view_extents: super::extent::ViewExtentConfig,
 }
@@ -457,7 +459,7 @@ impl MapperConfig {
             cross_merge_iou: in_range(0.01, 1.0),
             distinct_after: count(1, 1_000_000),
             [view_extents, flat, sparse, existence, segmentation, association, sopm]: section,
-            [registration, grid, level]: section,
+            [registration, grid, level, yaw_calibration]: section,
         });
         Ok(())
     }

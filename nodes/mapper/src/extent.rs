@@ -44,6 +44,9 @@ pub struct ViewExtentConfig {
     /// The height too: each view's robust height, fused like the footprint (the cuboid keeps
     /// its bottom on the supporting plane); `false`: the merged cloud's height.
     pub height: bool,
+    /// The horizontal centre too: per axis the median midpoint of the views that see it
+    /// squarely; `false`: the merged cloud's centre.
+    pub centre: bool,
 }
 
 impl Default for ViewExtentConfig {
@@ -67,6 +70,17 @@ impl ViewExtentConfig {
         });
         Ok(())
     }
+}
+
+/// The fused footprint along one axis.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct FusedAxis {
+    /// Extent, metres.
+    pub size: f32,
+    /// Median midpoint (coordinate along the axis), metres.
+    pub mid: f32,
+    /// Views that see the axis squarely.
+    pub views: usize,
 }
 
 /// One recorded view.
@@ -141,16 +155,19 @@ impl ViewExtents {
         }
     }
 
-    /// Fused footprint size along the axes of `yaw` (x, y), each `None` when fewer than
-    /// `min_views` views see that axis squarely.
-    pub fn fused(&self, yaw: f32, cfg: &ViewExtentConfig) -> [Option<f32>; 2] {
+    /// Fused footprint along the axes of `yaw` (x, y): per axis the `view_quantile` of the
+    /// squarely-seeing views' extents and the median of their midpoints (a silhouette's middle
+    /// is free of the near-side bias of a partial view; the median drops views with bleed or
+    /// an outlying pose), each `None` when fewer than `min_views` views see that axis squarely.
+    pub fn fused_axes(&self, yaw: f32, cfg: &ViewExtentConfig) -> [Option<FusedAxis>; 2] {
         let q = cfg.point_quantile;
         let (s, c) = yaw.sin_cos();
         let axes = [Vec2::new(c, s), Vec2::new(-s, c)];
         let mut vals = Vec::new();
-        let mut ext = Vec::new();
+        let (mut ext, mut mid) = (Vec::new(), Vec::new());
         axes.map(|axis| {
             ext.clear();
+            mid.clear();
             for v in &self.views {
                 if v.los.dot(axis).abs() > cfg.perpendicular_cos {
                     continue;
@@ -160,10 +177,34 @@ impl ViewExtents {
                 let lo = quantile(&mut vals, q);
                 let hi = quantile(&mut vals, 1.0 - q);
                 ext.push(hi - lo);
+                mid.push(0.5 * (hi + lo));
             }
-            (ext.len() >= cfg.min_views.max(1) as usize)
-                .then(|| quantile(&mut ext, cfg.view_quantile))
+            (ext.len() >= cfg.min_views.max(1) as usize).then(|| FusedAxis {
+                size: quantile(&mut ext, cfg.view_quantile),
+                mid: quantile(&mut mid, 0.5),
+                views: ext.len(),
+            })
         })
+    }
+
+    /// Fused footprint size along the axes of `yaw` (x, y) ([`Self::fused_axes`]).
+    pub fn fused(&self, yaw: f32, cfg: &ViewExtentConfig) -> [Option<f32>; 2] {
+        self.fused_axes(yaw, cfg).map(|a| a.map(|a| a.size))
+    }
+
+    /// The horizontal centre: `centre` moved, along each axis of `yaw` with a fused midpoint of
+    /// at least three views (a median of two is one of them), to that midpoint
+    /// ([`Self::fused_axes`]); z is kept.
+    pub fn centre(&self, centre: Vec3, yaw: f32, cfg: &ViewExtentConfig) -> Vec3 {
+        let (s, c) = yaw.sin_cos();
+        let axes = [Vec2::new(c, s), Vec2::new(-s, c)];
+        let mut xy = centre.truncate();
+        for (axis, fused) in axes.iter().zip(self.fused_axes(yaw, cfg)) {
+            if let Some(f) = fused.filter(|f| f.views >= 3) {
+                xy += (f.mid - xy.dot(*axis)) * *axis;
+            }
+        }
+        xy.extend(centre.z)
     }
 
     /// Fused height: the `view_quantile` of the views' heights (every view sees the height),
@@ -207,6 +248,7 @@ mod tests {
             point_quantile: 0.0,
             view_quantile: 0.5,
             height: false,
+            centre: false,
         }
     }
 
@@ -255,6 +297,32 @@ mod tests {
         assert!((size.x - 0.2).abs() < 1e-3, "{size}");
         assert!((size.y - 0.1).abs() < 1e-3, "{size}");
         assert_eq!(size.z, 0.1);
+    }
+
+    #[test]
+    fn fused_centre_is_the_median_silhouette_middle() {
+        // Views from around, each shifted by its own pose error (up to 1 cm), one with 15 cm of
+        // bleed along x: the merged cloud's centre is pulled, the fused centre is not.
+        let mut e = ViewExtents::default();
+        let c16 = ViewExtentConfig {
+            max_views: 16,
+            ..cfg()
+        };
+        for k in 0..16 {
+            let deg = 22.5 * k as f32;
+            let shift = 0.01 * Vec2::new((k as f32 * 2.1).sin(), (k as f32 * 1.3).cos());
+            let (mut pts, cam) = view_points(deg, shift);
+            if k == 4 {
+                pts.extend((0..40).map(|i| Vec3::new(0.1 + 0.15 * i as f32 / 39.0, 0.0, 0.8)));
+            }
+            e.record(&pts, cam, &c16);
+        }
+        let pulled = Vec3::new(0.05, -0.01, 0.8);
+        let c = e.centre(pulled, 0.0, &c16);
+        assert!(c.truncate().length() < 0.012, "{c}");
+        assert_eq!(c.z, 0.8);
+        // No view sees an axis squarely: that coordinate stays.
+        assert_eq!(ViewExtents::default().centre(pulled, 0.0, &cfg()), pulled);
     }
 
     #[test]

@@ -58,6 +58,7 @@ pub(crate) static DEFAULTS: settings::Defaults = settings::Defaults::new(
 );
 
 pub mod association;
+pub mod calib;
 pub mod config;
 pub mod cuboid;
 pub mod existence;
@@ -182,6 +183,8 @@ pub struct Mapper {
     reg: register::Registration,
     /// Floor-levelling scratch: candidate floor points.
     level_scratch: Vec<glam::DVec3>,
+    /// Camera-yaw offset calibration.
+    yaw_cal: calib::YawCalibration,
     last_frame_seq: u64,
     last_frame_stamp_ns: u64,
     last_sim_time_ns: u64,
@@ -224,6 +227,7 @@ impl Mapper {
             grid: ExplorationGrid::new(&cfg.grid),
             reg: register::Registration::default(),
             level_scratch: Vec::new(),
+            yaw_cal: calib::YawCalibration::default(),
             last_frame_seq: 0,
             last_frame_stamp_ns: 0,
             last_sim_time_ns: 0,
@@ -290,6 +294,15 @@ impl Mapper {
         self.receipt(frame_seq, state_seq, frame_outcome::NO_DETECTIONS);
     }
 
+    /// The camera-yaw offset applied to new frames (radians) and the current estimate
+    /// (`[mapper.yaw_calibration]`).
+    pub fn yaw_offset(&self) -> (f32, Option<calib::YawOffset>) {
+        (
+            self.yaw_cal.applied(),
+            self.yaw_cal.estimate(&self.cfg.yaw_calibration),
+        )
+    }
+
     /// The next map's receipts are full: a host publishes it now, before the next frame, so that
     /// no receipt is lost.
     pub fn receipts_full(&self) -> bool {
@@ -353,6 +366,9 @@ impl Mapper {
             k: frame.intrinsics,
         };
         let mut pose = pose_to_affine(&frame.camera_pose);
+        if self.cfg.yaw_calibration.enabled {
+            pose = self.yaw_cal.correction(&pose) * pose;
+        }
         if self.cfg.level.enabled {
             let fit = level::fit_floor(
                 frame,
@@ -409,6 +425,9 @@ impl Mapper {
             }
         }
         self.reg.end_frame(&self.cfg.registration);
+        if self.cfg.yaw_calibration.enabled {
+            self.yaw_cal.update(&self.cfg.yaw_calibration);
+        }
         self.det_order = order;
         if self.cfg.extensions.co_detection {
             self.count_co_detections();
@@ -680,6 +699,10 @@ impl Mapper {
             };
             if let Some(j) = target {
                 let o = &mut self.objects[j];
+                if fg && self.cfg.yaw_calibration.enabled && !pts.is_empty() {
+                    let centroid = pts.iter().copied().sum::<Vec3>() / pts.len() as f32;
+                    self.yaw_cal.record(o.id, centroid, cam_pos);
+                }
                 o.merge(&pts, cam_pos);
                 let dyaw = o.refit(&mut self.cuboid_scratch, &mut self.centroids, &fit);
                 if fg {

@@ -57,7 +57,7 @@ impl Mapper {
             // and a negative size fails `ObjectMap` validation, which drops the whole map.
             let size = self.published_size(o).max(Vec3::ZERO);
             // A fused height keeps the bottom (on the supporting plane) and lowers the top.
-            let mut center = o.cuboid.center;
+            let mut center = self.published_centre(o);
             center.z -= 0.5 * (o.cuboid.size.z - size.z).max(0.0);
             m.center = center.to_array();
             m.size = size.to_array();
@@ -116,6 +116,16 @@ impl Mapper {
             self.cfg.support_margin,
             &self.cfg.view_extents,
         )
+    }
+
+    /// The centre an object is published with: with `[mapper.view_extents] centre` a foreground
+    /// object's horizontal centre comes from its per-view midpoints ([`super::extent`]).
+    pub fn published_centre(&self, o: &MappedObject) -> Vec3 {
+        let ve = &self.cfg.view_extents;
+        if o.background || !self.cfg.extensions.view_extents || !ve.centre {
+            return o.cuboid.center;
+        }
+        o.views.centre(o.cuboid.center, o.cuboid.yaw, ve)
     }
 
     /// Background object supporting a foreground object: its footprint (grown by 5 cm) holds the

@@ -71,6 +71,8 @@ pub struct OrbitResult {
     pub objects: Vec<OrbitObject>,
     /// Frames integrated, and of them those whose pose was levelled on the floor.
     pub frames: (u32, u32),
+    /// The camera-yaw offset the mapper applied at the end, degrees.
+    pub yaw_offset_deg: f32,
 }
 
 /// Visible pixels for a frame to count as showing an object well (as `metrics.json` `views`).
@@ -253,6 +255,7 @@ pub fn run_orbit(spec: &OrbitSpec) -> Result<OrbitResult, SessionError> {
         lap_end_s,
         objects,
         frames,
+        yaw_offset_deg: mapper.yaw_offset().0.to_degrees(),
     })
 }
 
@@ -261,7 +264,7 @@ impl OrbitResult {
     pub fn table(&self) -> String {
         let laps = self.lap_end_s.len();
         let mut out = format!(
-            "Orbit of {} (radius {:.2} m, {} waypoints per lap; laps end at {} s; {} frames, {} levelled on the floor)\n\n| object | max px |",
+            "Orbit of {} (radius {:.2} m, {} waypoints per lap; laps end at {} s; {} frames, {} levelled on the floor; camera-yaw offset {:.2}°)\n\n| object | max px |",
             self.cluster,
             self.radius_m,
             self.waypoints,
@@ -271,7 +274,8 @@ impl OrbitResult {
                 .collect::<Vec<_>>()
                 .join(", "),
             self.frames.0,
-            self.frames.1
+            self.frames.1,
+            self.yaw_offset_deg
         );
         for l in 1..=laps {
             out += &format!(" IoU {l} | CDE {l} (m) | frames {l} |");

@@ -63,6 +63,7 @@ fn a_regression_is_a_fall_in_iou_beyond_the_slack_or_a_growing_centre_error() {
         waypoints: 12,
         lap_end_s: vec![50.0, 100.0],
         frames: (10, 5),
+        yaw_offset_deg: 0.0,
         objects: vec![
             obj(
                 "steady",
