@@ -50,8 +50,8 @@ pub(crate) struct Spec {
     pub(super) limited: Vec<(&'static str, f64)>,
     pub(super) poll_ms: u64,
     pub(super) linger: Duration,
-    /// `[link] buffer`.
-    pub(super) buffer: usize,
+    /// Each run topic's subscriber depth ([`super::watch::service_depths`]).
+    pub(super) depths: Vec<(&'static str, usize)>,
 }
 
 impl Spec {
@@ -150,7 +150,7 @@ impl Link {
             local,
             limited,
             poll_ms: cfg.link.poll_ms,
-            buffer: cfg.link.buffer,
+            depths: super::watch::service_depths(cfg),
             linger: Duration::from_millis(cfg.link.linger_ms),
         };
         let shared = Arc::new(Shared {

@@ -58,6 +58,48 @@ use std::path::PathBuf;
 use std::sync::atomic::AtomicBool;
 use std::time::Duration;
 
+/// How long (wall time) a subscriber sized by [`burst_depth`] may go unread without losing a
+/// sample: samples from another host arrive in bursts, and a loaded 2-CPU machine leaves a
+/// process off the CPU for a few hundred ms (the station recorder's losses of issue #35).
+pub const STALL_S: f64 = 0.5;
+
+/// A large topic's buffers are at most this deep: every slot of a 600 KB frame costs shared
+/// memory for each possible subscriber.
+pub const LARGE_DEPTH_MAX: usize = 8;
+
+/// Samples `topic` brings per wall second in a run at `time_scale`: its configured rate
+/// (`[rates]`, `[planner] lbv_hz`) × the time scale; for a topic `[link.max_hz]` limits, at most
+/// the limit (what crosses). `None` for a topic without a configured rate.
+pub fn wall_hz(topic: &str, cfg: &crate::config::Config, time_scale: f64) -> Option<f64> {
+    use crate::topics;
+    let sim_hz = match topic {
+        topics::DEPTH | topics::DETECTIONS | topics::VISIBILITY => cfg.rates.camera_hz,
+        topics::STATE | topics::TRUTH => cfg.rates.state_hz,
+        topics::MAP | topics::MAP_GRID | topics::NAV_GRID => cfg.rates.map_hz,
+        // At most one per LBV cycle.
+        topics::NECK_GOAL | topics::DEADLINE | topics::NAV_GOAL | topics::DECISION => {
+            cfg.planner.lbv_hz
+        }
+        // Heartbeats are on the wall clock, one stream per node.
+        topics::HEALTH => return Some(cfg.run.health_hz * super::ROLES.len() as f64),
+        _ => return None,
+    };
+    let hz = sim_hz * time_scale;
+    Some(match cfg.link.max_hz.get(topic) {
+        Some(&limit) if limit > 0.0 => hz.min(limit),
+        _ => hz,
+    })
+}
+
+/// The depth that holds [`STALL_S`] of `topic` at `wall_hz`, at least `configured`; a large
+/// topic (`large`) at most [`LARGE_DEPTH_MAX`] (but never below `configured`), any at most 256
+/// (`[ports] subscriber_buffer`'s range).
+pub fn burst_depth(wall_hz: Option<f64>, configured: usize, large: bool) -> usize {
+    let want = wall_hz.map_or(0, |hz| (hz * STALL_S).ceil() as usize);
+    let cap = if large { LARGE_DEPTH_MAX } else { 256 };
+    want.min(cap).max(configured).min(256)
+}
+
 /// `--link` and `--zenoh-config` as given.
 #[derive(Debug, Clone, PartialEq, Eq)]
 pub struct LinkArgs {

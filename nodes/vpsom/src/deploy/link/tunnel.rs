@@ -100,7 +100,7 @@ fn all_bridged(link: &ZenohLink, allow: &HashSet<String>) -> Result<bool, LinkEr
 
 /// Run the tunnel until `shared.stop`, then for `linger` more; returns what it moved.
 pub(super) fn run(spec: Spec, shared: Arc<Shared>) -> Result<LinkReport, LinkError> {
-    let ports = super::watch::tunnel_ports(&spec.ports, spec.buffer);
+    let ports = super::watch::tunnel_ports(&spec.ports, &spec.depths);
     let ctx = PortContext::with_namespace(&ports, "link-ports", &spec.namespace)?;
     let mut watch = Watch::new(&ctx, &spec.local, &spec.limited_topics())?;
     let mut throttle = Throttle::new(&ctx, &spec.limited, &spec.local)?;

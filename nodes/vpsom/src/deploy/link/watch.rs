@@ -4,10 +4,12 @@
 //!
 //! These subscribers also create the run's services before anything else on the host does
 //! (the launcher starts the tunnel first), with the run's `[ports]` settings except that each
-//! subscriber may borrow a little more (see [`tunnel_ports`]) and a small topic's services
-//! buffer up to [`LinkConfig::buffer`](crate::config::LinkConfig) samples per subscriber: the tunnel's own subscribers (the bridge's, and these) take that
-//! depth, so the bursts in which samples come over a network do not overwrite them, while the
-//! nodes' subscribers keep the depth they ask for (a service admits any depth up to its own).
+//! subscriber may borrow a little more (see [`tunnel_ports`]) and each topic's services buffer
+//! [`service_depths`] samples per subscriber: [`STALL_S`](super::STALL_S) of the topic's rate,
+//! a small topic at least [`LinkConfig::buffer`](crate::config::LinkConfig). The tunnel's own
+//! subscribers (the bridge's, and these) take that depth, so the bursts in which samples come
+//! over a network do not overwrite them; the nodes' subscribers keep the depth they ask for (a
+//! service admits any depth up to its own), the recorder asks for that depth too.
 
 use super::TopicCount;
 use crate::topics;
@@ -58,23 +60,44 @@ fn message_size(topic: &str) -> usize {
 /// Extra samples a subscriber may hold borrowed on a service the tunnel created.
 const EXTRA_BORROWS: usize = 2;
 
-/// The `[ports]` settings the tunnel creates the run's services with: small topics buffer at
-/// least `buffer` samples per subscriber (see the module docs), and every subscriber may hold
-/// [`EXTRA_BORROWS`] more samples borrowed than `[ports]` says. Samples from the other host come
-/// in bursts, so a consumer that keeps the newest sample while draining to the next
-/// (`Subscriber::latest`) holds three at once where one host rarely gives it two
+/// The subscriber depth the tunnel creates each run topic's services with (see the module
+/// docs): [`burst_depth`](super::burst_depth) of the topic's wall rate at `[run] time_scale`,
+/// at least `[ports]`' depth and, for a small topic, at least `[link] buffer`. A node here may
+/// then subscribe that deep (the station's recorder does: `deploy::recorder::recorder_ports`).
+pub fn service_depths(cfg: &crate::config::Config) -> Vec<(&'static str, usize)> {
+    RUN_TOPICS
+        .iter()
+        .map(|&topic| {
+            let configured = cfg.ports.topic(topic).subscriber_buffer;
+            let large = message_size(topic) > SMALL;
+            let base = if large {
+                configured
+            } else {
+                configured.max(cfg.link.buffer)
+            };
+            let hz = super::wall_hz(topic, cfg, cfg.run.time_scale);
+            (topic, super::burst_depth(hz, base, large))
+        })
+        .collect()
+}
+
+/// The `[ports]` settings the tunnel creates the run's services with: each run topic's
+/// subscribers as deep as `depths` says ([`service_depths`]; see the module docs), and every
+/// subscriber may hold [`EXTRA_BORROWS`] more samples borrowed than `[ports]` says. Samples from
+/// the other host come in bursts, so a consumer that keeps the newest sample while draining to
+/// the next (`Subscriber::latest`) holds three at once where one host rarely gives it two
 /// (regression: the planner on the station died with `ExceedsMaxBorrows` on `map`).
 pub fn tunnel_ports(
     ports: &runtime::ports::PortsConfig,
-    buffer: usize,
+    depths: &[(&'static str, usize)],
 ) -> runtime::ports::PortsConfig {
     let mut p = ports.clone();
     for topic in RUN_TOPICS {
         let s = ports.topic(topic);
         let o = p.topics.entry(topic.to_string()).or_default();
         o.subscriber_max_borrowed = Some(s.subscriber_max_borrowed + EXTRA_BORROWS);
-        if message_size(topic) <= SMALL {
-            o.subscriber_buffer = Some(s.subscriber_buffer.max(buffer));
+        if let Some(&(_, depth)) = depths.iter().find(|(t, _)| *t == topic) {
+            o.subscriber_buffer = Some(depth);
         }
     }
     p
