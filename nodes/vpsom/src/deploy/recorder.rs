@@ -299,19 +299,48 @@ impl NodeHost for RecorderHost {
     }
 
     fn finish(self) -> Result<(), HostError> {
-        let missed = self.depth.gaps()
-            + self.detections.gaps()
-            + self.state.gaps()
-            + self.truth.gaps()
-            + self.map.gaps()
-            + self.decision.gaps();
+        let gaps = [
+            (topics::STATE, self.state.gaps()),
+            (topics::TRUTH, self.truth.gaps()),
+            (topics::MAP, self.map.gaps()),
+            (topics::DECISION, self.decision.gaps()),
+            (topics::NAV_GOAL, self.nav.gaps()),
+            (topics::NECK_GOAL, self.neck.gaps()),
+            (topics::DEADLINE, self.deadline.gaps()),
+            (topics::DEPTH, self.depth.gaps()),
+            (topics::DETECTIONS, self.detections.gaps()),
+            (topics::NAV_GRID, self.grid.gaps()),
+        ];
+        // A last heartbeat with the final input counts: the launcher's and the link tunnel's
+        // accounts read the overflow of this recorder's subscribers from it (the periodic
+        // ones are up to a heartbeat period old).
+        match super::health::Heartbeat::of(&self) {
+            Ok(Some(mut beat)) => {
+                if let Err(e) = beat.tick("recorder", &self) {
+                    eprintln!("recorder: the last heartbeat: {e}");
+                }
+            }
+            Ok(None) => {}
+            Err(e) => eprintln!("recorder: the last heartbeat: {e}"),
+        }
+        let missed: u64 = gaps.iter().map(|g| g.1).sum();
+        let per_topic: Vec<String> = gaps
+            .iter()
+            .filter(|g| g.1 > 0)
+            .map(|(t, n)| format!("{t} {n}"))
+            .collect();
         let summary = self.rec.finish()?;
         eprintln!(
             "recorder: wrote {} messages, dropped {} in the recorder, {} samples overwritten \
-             before they were read",
+             before they were read or lost before they reached this host (sequence gaps){}",
             summary.written.values().sum::<u64>(),
             summary.drops.total_dropped(),
-            missed
+            missed,
+            if per_topic.is_empty() {
+                String::new()
+            } else {
+                format!(": {}", per_topic.join(", "))
+            }
         );
         Ok(())
     }

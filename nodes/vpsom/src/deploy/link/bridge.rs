@@ -52,6 +52,8 @@ pub(crate) struct Spec {
     pub(super) linger: Duration,
     /// Each run topic's subscriber depth ([`super::watch::service_depths`]).
     pub(super) depths: Vec<(&'static str, usize)>,
+    /// Each run topic's wall rate at `[run] time_scale` ([`super::wall_hz`]), for the report.
+    pub(super) rates: Vec<(&'static str, Option<f64>)>,
 }
 
 impl Spec {
@@ -151,6 +153,10 @@ impl Link {
             limited,
             poll_ms: cfg.link.poll_ms,
             depths: super::watch::service_depths(cfg),
+            rates: RUN_TOPICS
+                .iter()
+                .map(|&t| (t, super::wall_hz(t, cfg, cfg.run.time_scale)))
+                .collect(),
             linger: Duration::from_millis(cfg.link.linger_ms),
         };
         let shared = Arc::new(Shared {

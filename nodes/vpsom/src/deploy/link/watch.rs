@@ -15,9 +15,10 @@ use super::TopicCount;
 use crate::topics;
 use runtime::ports::{PortContext, ReceiveError, Subscriber, SubscriberError};
 use shm_types::{
-    DeadlineEvent, DepthFrame, Detections, FrameVisibility, Message, NavGoal, NeckGoal, ObjectMap,
-    OccupancyGrid, PlannerDecision, RobotState,
+    DeadlineEvent, DepthFrame, Detections, FrameVisibility, Message, NavGoal, NeckGoal, NodeHealth,
+    ObjectMap, OccupancyGrid, PlannerDecision, RobotState,
 };
+use std::collections::BTreeMap;
 use std::time::{Duration, Instant};
 
 /// Every topic of a run (the tunnel's allow-list is built from it).
@@ -149,17 +150,88 @@ struct Watched {
     sub: Box<dyn Seqs>,
     /// Published on the other host (inbound); else here (outbound).
     remote: bool,
-    /// Whether missing sequence numbers are losses (not for a rate-limited topic).
-    count_losses: bool,
+    /// Rate-limited (`[link.max_hz]`): crosses through a relay, so its sequence gaps across the
+    /// link are by design, not losses.
+    limited: bool,
+    /// Its wall rate, Hz ([`super::wall_hz`] at `[run] time_scale`), for the report.
+    hz: Option<f64>,
     last_seq: Option<u64>,
+    /// Sequence numbers of earlier publisher incarnations (a restarted node counts from 1).
+    seq_base: u64,
     samples: u64,
-    lost: u64,
+    /// Sequence numbers missing in what this subscriber received (before the first and between
+    /// two): inbound, lost in the tunnel; outbound, dropped before the tunnel took them.
+    missing: u64,
+    /// Of `missing`, those between two received samples (a local subscriber sees them as gaps
+    /// too).
+    interior: u64,
     last_loss_log: Option<Instant>,
+}
+
+impl Watched {
+    /// Account for a received sequence number; returns the sequence numbers it skipped.
+    fn observe(&mut self, seq: u64) -> u64 {
+        self.samples += 1;
+        let skipped = match self.last_seq {
+            // A restarted publisher counts from 1 again.
+            Some(l) if seq <= l => {
+                self.seq_base += l;
+                seq.saturating_sub(1)
+            }
+            Some(l) => {
+                self.interior += seq - l - 1;
+                seq - l - 1
+            }
+            None => seq.saturating_sub(1),
+        };
+        self.missing += skipped;
+        self.last_seq = Some(seq);
+        skipped
+    }
+
+    /// Sequence numbers the publisher used so far (as far as seen here).
+    fn published(&self) -> u64 {
+        self.seq_base + self.last_seq.unwrap_or(0)
+    }
+}
+
+/// The newest input account each local node reported on `health` (see `deploy::health`).
+#[derive(Default)]
+struct NodeInputs {
+    /// (node, pid) → [(topic, overflow)].
+    newest: BTreeMap<(String, u32), Vec<(String, u64)>>,
+}
+
+impl NodeInputs {
+    fn take(&mut self, h: &NodeHealth) {
+        let inputs = h
+            .inputs()
+            .iter()
+            .map(|i| (i.topic_name().to_string(), i.overflow))
+            .collect();
+        self.newest
+            .insert((h.node_name().to_string(), h.pid), inputs);
+    }
+
+    /// Per node (summed over its incarnations): samples of `topic` it lost to overflow.
+    fn overflow(&self, topic: &str) -> BTreeMap<String, u64> {
+        let mut by_node = BTreeMap::new();
+        for ((node, _), inputs) in &self.newest {
+            for (t, n) in inputs {
+                if t == topic {
+                    *by_node.entry(node.clone()).or_insert(0) += n;
+                }
+            }
+        }
+        by_node
+    }
 }
 
 /// The per-topic account of a tunnel (see the module docs).
 pub struct Watch {
     topics: Vec<Watched>,
+    health: Subscriber<NodeHealth>,
+    nodes: NodeInputs,
 }
 
 impl std::fmt::Debug for Watch {
@@ -171,12 +243,14 @@ impl std::fmt::Debug for Watch {
 }
 
 impl Watch {
-    /// Subscribe to every run topic; `local` are the topics published on this host and
-    /// `limited` the rate-limited ones.
+    /// Subscribe to every run topic (and to the nodes' heartbeats, for their overflow
+    /// counts); `local` are the topics published on this host, `limited` the rate-limited ones,
+    /// `hz` each topic's wall rate.
     pub fn new(
         ctx: &PortContext,
         local: &[&'static str],
         limited: &[&'static str],
+        hz: impl Fn(&str) -> Option<f64>,
     ) -> Result<Self, SubscriberError> {
         let topics = RUN_TOPICS
             .iter()
@@ -185,70 +259,146 @@ impl Watch {
                     topic,
                     sub: subscribe(ctx, topic)?,
                     remote: !local.contains(&topic),
-                    count_losses: !limited.contains(&topic),
+                    limited: limited.contains(&topic),
+                    hz: hz(topic),
                     last_seq: None,
+                    seq_base: 0,
                     samples: 0,
-                    lost: 0,
+                    missing: 0,
+                    interior: 0,
                     last_loss_log: None,
                 })
             })
             .collect::<Result<_, SubscriberError>>()?;
-        Ok(Self { topics })
+        Ok(Self {
+            topics,
+            health: ctx.subscriber(topics::HEALTH)?,
+            nodes: NodeInputs::default(),
+        })
     }
 
-    /// Drain every subscriber; returns the inbound samples received. Logs lost sequence numbers
-    /// at most once per [`LOSS_LOG_EVERY`] per topic.
+    /// Drain every subscriber; returns the inbound samples received. Logs sequence numbers lost
+    /// across the link at most once per [`LOSS_LOG_EVERY`] per topic.
     pub fn poll(&mut self, now: Instant) -> Result<u64, ReceiveError> {
         let mut inbound = 0;
         for w in &mut self.topics {
-            let (mut n, mut lost_now, mut jump) = (0u64, 0u64, None);
-            let (remote, count_losses) = (w.remote, w.count_losses);
-            let last = &mut w.last_seq;
-            w.sub.drain(&mut |seq| {
-                n += 1;
-                if let Some(l) = *last
-                    && remote
-                    && count_losses
-                    && seq > l + 1
-                {
-                    lost_now += seq - l - 1;
-                    jump = Some((l, seq));
+            let (mut lost_now, mut jump) = (0u64, None);
+            let before = w.samples;
+            let mut seqs = Vec::new();
+            w.sub.drain(&mut |seq| seqs.push(seq))?;
+            for seq in seqs {
+                let last = w.last_seq.unwrap_or(0);
+                let skipped = w.observe(seq);
+                if skipped > 0 && w.remote && !w.limited {
+                    lost_now += skipped;
+                    jump = Some((last, seq));
                 }
-                *last = Some(seq);
-            })?;
-            w.samples += n;
-            if remote {
-                inbound += n;
             }
-            if lost_now > 0 {
-                w.lost += lost_now;
-                if w.last_loss_log
+            if w.remote {
+                inbound += w.samples - before;
+            }
+            if lost_now > 0
+                && w.last_loss_log
                     .is_none_or(|t| now.duration_since(t) >= LOSS_LOG_EVERY)
-                {
-                    w.last_loss_log = Some(now);
-                    let (a, b) = jump.unwrap_or_default();
-                    eprintln!(
-                        "\nlink: {}: {lost_now} sample(s) lost across the link (seq {a} -> {b}; {} so far)",
-                        w.topic, w.lost
-                    );
-                }
+            {
+                w.last_loss_log = Some(now);
+                let (a, b) = jump.unwrap_or_default();
+                eprintln!(
+                    "\nlink: {}: {lost_now} sample(s) lost across the link (seq {a} -> {b}; {} so far)",
+                    w.topic, w.missing
+                );
             }
+        }
+        while let Some(h) = self.health.receive()? {
+            self.nodes.take(&h);
         }
         Ok(inbound)
     }
 
-    /// Per-topic counts (topics that saw nothing are left out).
-    pub fn counts(&self) -> Vec<TopicCount> {
+    /// Per-topic counts (topics that saw nothing are left out); `relayed(topic)`: the samples
+    /// the rate-limit relay of `topic` copied.
+    pub fn counts(&self, relayed: impl Fn(&str) -> u64) -> Vec<TopicCount> {
         self.topics
             .iter()
             .filter(|w| w.samples > 0 || w.sub.invalid() > 0)
-            .map(|w| TopicCount {
-                topic: w.topic,
-                inbound: w.remote,
-                samples: w.samples,
-                lost: w.lost,
-                invalid: w.sub.invalid(),
+            .map(|w| {
+                let mut dropped: Vec<(String, u64)> = self
+                    .nodes
+                    .overflow(w.topic)
+                    .into_iter()
+                    .map(|(node, gaps)| {
+                        // A node's sequence gaps include what never reached this host.
+                        let n = if w.remote && !w.limited {
+                            gaps.saturating_sub(w.interior)
+                        } else {
+                            gaps
+                        };
+                        (node, n)
+                    })
+                    .collect();
+                // A rate-limited topic's nodes here see the limit's gaps: not losses.
+                if w.remote && w.limited {
+                    dropped.clear();
+                }
+                let (published, crossed, received, lost) = match (w.remote, w.limited) {
+                    (false, false) => (w.published(), w.samples, 0, 0),
+                    (false, true) => (w.published(), relayed(w.topic), 0, 0),
+                    (true, false) => (0, 0, w.samples, w.missing),
+                    (true, true) => (0, 0, relayed(w.topic), 0),
+                };
+                TopicCount {
+                    topic: w.topic,
+                    inbound: w.remote,
+                    limited: w.limited,
+                    hz: w.hz,
+                    published,
+                    crossed,
+                    received,
+                    lost,
+                    dropped,
+                    invalid: w.sub.invalid(),
+                }
             })
             .collect()
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    struct NoSamples;
+
+    impl Seqs for NoSamples {
+        fn drain(&self, _f: &mut dyn FnMut(u64)) -> Result<(), ReceiveError> {
+            Ok(())
+        }
+
+        fn invalid(&self) -> u64 {
+            0
+        }
+    }
+
+    #[test]
+    fn every_sequence_number_is_received_or_missing_across_a_publisher_restart() {
+        let mut w = Watched {
+            topic: topics::STATE,
+            sub: Box::new(NoSamples),
+            remote: true,
+            limited: false,
+            hz: None,
+            last_seq: None,
+            seq_base: 0,
+            samples: 0,
+            missing: 0,
+            interior: 0,
+            last_loss_log: None,
+        };
+        // 1, 2 before the first arrival; 5 between; a restart after 7; 3, 4 of the second run.
+        let skipped: Vec<u64> = [3, 4, 6, 7, 1, 2, 5].map(|s| w.observe(s)).to_vec();
+        assert_eq!(skipped, [2, 0, 1, 0, 0, 0, 2]);
+        assert_eq!(w.published(), 7 + 5);
+        assert_eq!((w.samples, w.missing, w.interior), (7, 5, 3));
+        assert_eq!(w.samples + w.missing, w.published());
     }
 }
