@@ -40,6 +40,11 @@ pub const RUN_TOPICS: [&str; 12] = [
 /// Topics whose message is at most this big get the tunnel's deeper buffer.
 pub const SMALL: usize = 16 * 1024;
 
+/// Whether `topic`'s message is small ([`SMALL`]).
+pub fn is_small(topic: &str) -> bool {
+    message_size(topic) <= SMALL
+}
+
 /// The size of a run topic's message, bytes.
 fn message_size(topic: &str) -> usize {
     use std::mem::size_of;
