@@ -5,7 +5,9 @@
 //! - `recorder_across_the_link_records_what_the_robot_published`: sim + mapper + planner (and a
 //!   reference recorder) in domain A, a recorder in domain B; the session terminates, and B's
 //!   trace holds every sample of A's topics that A's own recorder saw; depth frames, limited to
-//!   `[link.max_hz] depth` (the default 10 Hz), as many as crossed.
+//!   `[link.max_hz] depth` (the default 10 Hz), as many as crossed; and the two summaries'
+//!   per-topic accounts add up, with nothing lost on a topic under 100 Hz (issue #35,
+//!   [`the_accounts_add_up`]).
 //!
 //! The tests run one at a time (two `vpsom run`s each already fill the 2 CPUs), with buffers
 //! deep enough that no recorder loses a sample to the bursts in which samples come over TCP.
@@ -290,8 +292,17 @@ fn recorder_across_the_link_records_what_the_robot_published() {
             "{t}: station {nb} >> robot {na}\n{ia}\n{ib}"
         );
     }
+    // The accounts (`--nocapture`): what each host's summary says per topic.
+    for (host, out) in [("robot", &so_a), ("station", &so_b)] {
+        for l in out.lines().filter(|l| l.starts_with("| link: ")) {
+            eprintln!("recorder across the link, {host}: {l}");
+        }
+    }
+    the_accounts_add_up(&so_a, &so_b, &ib);
     // Depth: every frame that crossed is in the trace, and no more than 10 Hz crossed.
-    let crossed = row(&so_b, "link: depth samples received").unwrap_or(0.0);
+    let crossed = account(&so_b, "depth", "in")
+        .and_then(|a| a.counts[0])
+        .unwrap_or(0) as f64;
     let depth = received(&ib, topic::DEPTH) as f64;
     assert!(
         depth >= 1.0 && depth == crossed,
@@ -375,10 +386,7 @@ fn planner_across_the_link_drives_the_robot() {
         ia.count(topic::NAV_GOAL) > 0 && ia.count(topic::NECK_GOAL) > 0,
         "{ia}"
     );
-    assert!(
-        so_a.contains("| link: nav/goal samples received |"),
-        "{so_a}"
-    );
+    assert!(so_a.contains("| link: nav/goal in, "), "{so_a}");
     nothing_in_the_default_domain(&ns);
     let _ = std::fs::remove_dir_all(&dir);
 }
@@ -449,6 +457,107 @@ fn pump(mut from: TcpStream, mut to: TcpStream) {
         }
         let _ = to.shutdown(Shutdown::Both);
     });
+}
+
+/// One topic's account row of a run summary (`deploy::link::LinkReport::rows`).
+#[derive(Debug)]
+struct Account {
+    /// The topic's wall rate, Hz.
+    hz: f64,
+    /// `in`: received / lost in the tunnel / dropped by local subscribers; `out`: published /
+    /// crossed / dropped by local subscribers (`None`: `-`, not counted).
+    counts: [Option<u64>; 3],
+    /// The per-node part of the drop count, e.g. `(recorder 0, planner 0)`.
+    by_node: String,
+}
+
+/// The account row of `topic` (`dir`: `in` or `out`) in a summary.
+fn account(out: &str, topic: &str, dir: &str) -> Option<Account> {
+    let prefix = format!("| link: {topic} {dir}, ");
+    let line = out.lines().find(|l| l.starts_with(&prefix))?;
+    let hz = line[prefix.len()..].split(' ').next()?.parse().ok()?;
+    let cell = line.split('|').nth(2)?.trim();
+    let mut parts = cell.split(" / ");
+    let mut counts = [None; 3];
+    for c in &mut counts {
+        *c = parts.next()?.split_whitespace().next()?.parse().ok();
+    }
+    let by_node = cell
+        .find('(')
+        .map_or(String::new(), |i| cell[i..].to_string());
+    Some(Account {
+        hz,
+        counts,
+        by_node,
+    })
+}
+
+/// Samples the station's recorder lost to overflow on `topic` (`(recorder N)` in its row).
+fn recorder_dropped(a: &Account) -> u64 {
+    a.by_node
+        .trim_matches(|c| c == '(' || c == ')')
+        .split(", ")
+        .find_map(|p| p.strip_prefix("recorder "))
+        .and_then(|n| n.parse().ok())
+        .unwrap_or(0)
+}
+
+/// The recorder channels that hold one message per sample of a topic from the robot.
+const CHANNEL_OF: [(&str, &str); 6] = [
+    ("robot/state", topic::TF),
+    ("sim/truth", topic::TRUTH_TF),
+    ("map", topic::MAP),
+    ("nav/goal", topic::NAV_GOAL),
+    ("neck/goal", topic::NECK_GOAL),
+    ("deadline", topic::DEADLINE),
+];
+
+/// Issue #35's accounting, per topic the robot published and the station received: the
+/// robot's `published / crossed`, the station's `received / lost in the tunnel / dropped`.
+/// - every sequence number the robot used arrived at the station or is counted lost there
+///   (what the robot's tunnel did not take among them);
+/// - the station's recorder read what arrived less what it counted as its own overflow, and
+///   every one of those is in its trace (written, or dropped and counted by the recorder);
+/// - no topic under 100 Hz lost anything, and a rate-limited topic (depth) lost nothing
+///   between the robot's relay and the station's.
+fn the_accounts_add_up(robot: &str, station: &str, trace: &TraceInfo) {
+    let mut checked = 0;
+    for line in station
+        .lines()
+        .filter(|l| l.starts_with("| link: ") && !l.starts_with("| link: WARNING"))
+    {
+        let Some((topic, _)) = line["| link: ".len()..].split_once(" in, ") else {
+            continue;
+        };
+        let st = account(station, topic, "in").unwrap_or_else(|| panic!("{line}"));
+        let rb = account(robot, topic, "out")
+            .unwrap_or_else(|| panic!("{topic}: no account on the robot\n{robot}"));
+        let [published, crossed, _] = rb.counts.map(Option::unwrap_or_default);
+        let arrived = st.counts[0].unwrap();
+        let ctx = format!("{topic}: robot {rb:?}, station {st:?}\n{station}");
+        match st.counts[1] {
+            // Rate-limited: the relay's copies are what crossed.
+            None => assert_eq!(arrived, crossed, "{ctx}"),
+            Some(lost) => {
+                assert_eq!(arrived + lost, published, "unexplained loss: {ctx}");
+                let dropped = st.counts[2].unwrap();
+                if st.hz < 100.0 {
+                    assert_eq!(lost, 0, "lost in the tunnel: {ctx}");
+                    assert_eq!(dropped, 0, "dropped by a subscriber: {ctx}");
+                }
+                if let Some(&(_, channel)) = CHANNEL_OF.iter().find(|c| c.0 == topic) {
+                    let read = arrived.saturating_sub(recorder_dropped(&st));
+                    assert_eq!(
+                        received(trace, channel),
+                        read,
+                        "{channel}: the station's trace against what its recorder read: {ctx}\n{trace}"
+                    );
+                }
+            }
+        }
+        checked += 1;
+    }
+    assert!(checked >= CHANNEL_OF.len(), "{checked} accounts\n{station}");
 }
 
 /// A number after `label` in a summary table row `| label | N |`.
@@ -543,7 +652,9 @@ fn a_cut_link_is_counted_and_traffic_resumes() {
         row(&so_b, "link: times the other host was lost (total s)").unwrap_or(0.0) >= 1.0,
         "{so_b}"
     );
-    let lost = row(&so_b, "link: robot/state samples lost across the link").unwrap_or(0.0);
+    let lost = account(&so_b, "robot/state", "in")
+        .and_then(|a| a.counts[1])
+        .unwrap_or(0) as f64;
     // The figures (`--nocapture`): the gap as logged, what each side counted.
     for l in se_b
         .lines()
@@ -564,7 +675,9 @@ fn a_cut_link_is_counted_and_traffic_resumes() {
     assert!(so_b.contains("| end | planner"), "station:\n{so_b}\n{se_b}");
     // Depth frames crossed at most DEPTH_HZ a second (wall time: fewer frames on a slow
     // machine, never more), and some did.
-    let depth = row(&so_b, "link: depth samples received").unwrap_or(0.0);
+    let depth = account(&so_b, "depth", "in")
+        .and_then(|a| a.counts[0])
+        .unwrap_or(0) as f64;
     assert!(depth >= 1.0, "{so_b}");
     assert!(
         depth <= DEPTH_HZ * wall + 1.0,

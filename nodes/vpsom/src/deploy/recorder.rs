@@ -1,5 +1,12 @@
 //! `vpsom node recorder`: every topic to `OUT/trace.mcap`, polled on the main thread; and the
 //! recorder's view of a scene ([`recorder_setup`], also used by the lockstep host).
+//!
+//! The receive loop drains by priority (issue #35): every pass drains the small topics (robot
+//! states, goals, decisions, maps, deadline events, heartbeats) completely, then records at most
+//! [`LARGE_PER_PASS`] sample of each large one (depth, detections, the navigation grid), draining
+//! the small ones again after each. A burst of frames (from another host, or after the recorder
+//! was off the CPU) therefore never keeps a state waiting behind it until it is overwritten. The
+//! subscribers are as deep as the topics' rates ask for ([`recorder_ports`]).
 
 use super::RunArgs;
 use super::health::report_input;
@@ -8,7 +15,9 @@ use crate::config::Config;
 use crate::recording::{MountGeometry, SceneConverter, TruthBox};
 use crate::sim::Scene;
 use crate::topics;
-use runtime::ports::{PortContext, Subscriber};
+use iceoryx2::prelude::{MessagingPattern, ServiceName, ipc};
+use iceoryx2::service::Service as _;
+use runtime::ports::{PortContext, PortsConfig, Subscriber};
 use runtime::recorder::{Overflow, Recorder, RecorderHandle, RecorderSetup};
 use shm_types::{
     DeadlineEvent, DepthFrame, Detections, NavGoal, NeckGoal, NodeHealth, ObjectMap, OccupancyGrid,
@@ -62,6 +71,75 @@ fn live_setup(cfg: &Config, truth: Vec<TruthBox>) -> RecorderSetup {
     }
 }
 
+/// Large samples recorded per large topic in one pass of the receive loop, between two drains of
+/// the small topics (see the module docs).
+pub const LARGE_PER_PASS: usize = 1;
+
+/// The topics the recorder receives; `true`: large (drained with a budget, see the module docs).
+const RECORDED: [(&str, bool); 11] = [
+    (topics::STATE, false),
+    (topics::TRUTH, false),
+    (topics::MAP, false),
+    (topics::DECISION, false),
+    (topics::NAV_GOAL, false),
+    (topics::NECK_GOAL, false),
+    (topics::DEADLINE, false),
+    (topics::HEALTH, false),
+    (topics::DEPTH, true),
+    (topics::DETECTIONS, true),
+    (topics::NAV_GRID, true),
+];
+
+/// The subscriber depth a topic's existing service admits (`None`: no such service yet).
+fn service_max_buffer(namespace: &str, topic: &str) -> Option<usize> {
+    let full = format!("{}/{namespace}/{topic}", runtime::ports::SERVICE_ROOT);
+    let name = ServiceName::new(&full).ok()?;
+    let details = ipc::Service::details(
+        &name,
+        &runtime::ports::iceoryx2_config(),
+        MessagingPattern::PublishSubscribe,
+    )
+    .ok()??;
+    Some(
+        details
+            .static_details
+            .publish_subscribe()
+            .subscriber_max_buffer_size(),
+    )
+}
+
+/// The recorder's `[ports]`: each recorded topic's subscriber holds
+/// [`STALL_S`](super::link::STALL_S) of the topic at its wall rate (`[rates]` × `time_scale`,
+/// `[link.max_hz]` for a rate-limited topic; see [`super::link::burst_depth`]), at least its
+/// configured depth, and at most what the topic's service admits when it exists already: a
+/// service the link tunnel created (`vpsom run --link`) admits that depth (the tunnel sizes them
+/// the same way, small topics at least `[link] buffer`), one the launcher created only
+/// `[ports]`' depth. A service not there yet is created with the configured depth (a node
+/// opening it at the same moment asks for no more).
+pub fn recorder_ports(cfg: &Config, time_scale: f64, namespace: &str) -> PortsConfig {
+    let mut p = cfg.ports.clone();
+    for (topic, large) in RECORDED {
+        let configured = cfg.ports.topic(topic).subscriber_buffer;
+        let Some(max) = service_max_buffer(namespace, topic) else {
+            continue;
+        };
+        let want = super::link::burst_depth(
+            super::link::wall_hz(topic, cfg, time_scale),
+            configured,
+            large,
+        );
+        // Never below the configured depth: a service that admits less fails to open as before.
+        let depth = want.min(max).max(configured);
+        if depth != configured {
+            p.topics
+                .entry(topic.to_string())
+                .or_default()
+                .subscriber_buffer = Some(depth);
+        }
+    }
+    p
+}
+
 /// The recorder and a subscriber per recorded topic.
 struct RecorderHost {
     rec: Recorder,
@@ -105,7 +183,8 @@ impl RecorderHost {
         if let Some(p) = rec.live_port() {
             eprintln!("recorder: live view on ws://0.0.0.0:{p} (Foxglove: Open connection)");
         }
-        let ctx = PortContext::with_namespace(&cfg.ports, "recorder", &args.namespace)?;
+        let ports = recorder_ports(cfg, args.time_scale, &args.namespace);
+        let ctx = PortContext::with_namespace(&ports, "recorder", &args.namespace)?;
         Ok(Self {
             rec,
             h,
@@ -127,22 +206,11 @@ impl RecorderHost {
     }
 }
 
-impl NodeHost for RecorderHost {
-    fn step(&mut self, _stop: &AtomicBool) -> Result<Flow, HostError> {
+impl RecorderHost {
+    /// Record everything buffered on the small topics; whether there was anything.
+    fn drain_small(&mut self) -> Result<bool, HostError> {
         let h = &self.h;
         let mut any = false;
-        while let Some(s) = self.depth.receive()? {
-            h.record_depth(&s);
-            any = true;
-        }
-        while let Some(s) = self.detections.receive()? {
-            h.record_detections(&s);
-            any = true;
-        }
-        while let Some(s) = self.grid.receive()? {
-            h.record_nav_grid(&s);
-            any = true;
-        }
         while let Some(s) = self.state.receive()? {
             self.sim_ns = s.header.sim_time_ns;
             h.record_state(&s);
@@ -150,14 +218,6 @@ impl NodeHost for RecorderHost {
         }
         while let Some(s) = self.truth.receive()? {
             h.record_true_state(&s);
-            any = true;
-        }
-        while let Some(s) = self.map.receive()? {
-            h.record_map(&s);
-            any = true;
-        }
-        while let Some(s) = self.decision.receive()? {
-            h.record_decision(&s);
             any = true;
         }
         while let Some(s) = self.nav.receive()? {
@@ -172,11 +232,50 @@ impl NodeHost for RecorderHost {
             h.record_deadline(&s);
             any = true;
         }
+        while let Some(s) = self.decision.receive()? {
+            h.record_decision(&s);
+            any = true;
+        }
+        while let Some(s) = self.map.receive()? {
+            h.record_map(&s);
+            any = true;
+        }
         while let Some(s) = self.health.receive()? {
             // Stamped with the run's simulated time, so it sorts with the other topics.
             let mut beat = *s;
             beat.header.sim_time_ns = self.sim_ns;
             h.record_health(&beat);
+            any = true;
+        }
+        Ok(any)
+    }
+}
+
+impl NodeHost for RecorderHost {
+    fn step(&mut self, _stop: &AtomicBool) -> Result<Flow, HostError> {
+        // Small topics first, then a budget of each large one with the small ones drained again
+        // after each large sample (see the module docs).
+        let mut any = self.drain_small()?;
+        for _ in 0..LARGE_PER_PASS {
+            let mut large = false;
+            if let Some(s) = self.depth.receive()? {
+                self.h.record_depth(&s);
+                large = true;
+                self.drain_small()?;
+            }
+            if let Some(s) = self.detections.receive()? {
+                self.h.record_detections(&s);
+                large = true;
+                self.drain_small()?;
+            }
+            if let Some(s) = self.grid.receive()? {
+                self.h.record_nav_grid(&s);
+                large = true;
+                self.drain_small()?;
+            }
+            if !large {
+                break;
+            }
             any = true;
         }
         Ok(if any { Flow::Busy } else { Flow::Idle })
@@ -200,19 +299,48 @@ impl NodeHost for RecorderHost {
     }
 
     fn finish(self) -> Result<(), HostError> {
-        let missed = self.depth.gaps()
-            + self.detections.gaps()
-            + self.state.gaps()
-            + self.truth.gaps()
-            + self.map.gaps()
-            + self.decision.gaps();
+        let gaps = [
+            (topics::STATE, self.state.gaps()),
+            (topics::TRUTH, self.truth.gaps()),
+            (topics::MAP, self.map.gaps()),
+            (topics::DECISION, self.decision.gaps()),
+            (topics::NAV_GOAL, self.nav.gaps()),
+            (topics::NECK_GOAL, self.neck.gaps()),
+            (topics::DEADLINE, self.deadline.gaps()),
+            (topics::DEPTH, self.depth.gaps()),
+            (topics::DETECTIONS, self.detections.gaps()),
+            (topics::NAV_GRID, self.grid.gaps()),
+        ];
+        // A last heartbeat with the final input counts: the launcher's and the link tunnel's
+        // accounts read the overflow of this recorder's subscribers from it (the periodic
+        // ones are up to a heartbeat period old).
+        match super::health::Heartbeat::of(&self) {
+            Ok(Some(mut beat)) => {
+                if let Err(e) = beat.tick("recorder", &self) {
+                    eprintln!("recorder: the last heartbeat: {e}");
+                }
+            }
+            Ok(None) => {}
+            Err(e) => eprintln!("recorder: the last heartbeat: {e}"),
+        }
+        let missed: u64 = gaps.iter().map(|g| g.1).sum();
+        let per_topic: Vec<String> = gaps
+            .iter()
+            .filter(|g| g.1 > 0)
+            .map(|(t, n)| format!("{t} {n}"))
+            .collect();
         let summary = self.rec.finish()?;
         eprintln!(
             "recorder: wrote {} messages, dropped {} in the recorder, {} samples overwritten \
-             before they were read",
+             before they were read or lost before they reached this host (sequence gaps){}",
             summary.written.values().sum::<u64>(),
             summary.drops.total_dropped(),
-            missed
+            missed,
+            if per_topic.is_empty() {
+                String::new()
+            } else {
+                format!(": {}", per_topic.join(", "))
+            }
         );
         Ok(())
     }

@@ -1,7 +1,7 @@
 //! The tunnel's lifecycle as the launcher drives it: [`Link::start`] (configuration checks,
 //! the tunnel thread), [`Link::wait_for_peer`], [`Link::quiesce`], [`Link::finish`].
 
-use super::endpoints::{parse_endpoint, zenoh_config};
+use super::endpoints::{channel_qos, parse_endpoint, zenoh_config};
 use super::throttle::relay_topic;
 use super::tunnel;
 use super::watch::RUN_TOPICS;
@@ -50,8 +50,10 @@ pub(crate) struct Spec {
     pub(super) limited: Vec<(&'static str, f64)>,
     pub(super) poll_ms: u64,
     pub(super) linger: Duration,
-    /// `[link] buffer`.
-    pub(super) buffer: usize,
+    /// Each run topic's subscriber depth ([`super::watch::service_depths`]).
+    pub(super) depths: Vec<(&'static str, usize)>,
+    /// Each run topic's wall rate at `[run] time_scale` ([`super::wall_hz`]), for the report.
+    pub(super) rates: Vec<(&'static str, Option<f64>)>,
 }
 
 impl Spec {
@@ -120,7 +122,7 @@ impl Link {
         let file = args.zenoh_config.clone().or_else(|| {
             (!cfg.link.zenoh_config.is_empty()).then(|| PathBuf::from(&cfg.link.zenoh_config))
         });
-        let zenoh = zenoh_config(file.as_deref(), &endpoints)?;
+        let mut zenoh = zenoh_config(file.as_deref(), &endpoints)?;
         let local: Vec<&'static str> = RUN_TOPICS
             .into_iter()
             .filter(|t| {
@@ -142,6 +144,25 @@ impl Link {
                 false => service(t),
             })
             .collect();
+        // Small topics ahead of the large ones in zenoh's transmit queues (see channel_qos).
+        let (mut small, mut high) = (Vec::new(), Vec::new());
+        for t in RUN_TOPICS {
+            if limited.iter().any(|(l, _)| *l == t) {
+                continue;
+            }
+            if super::watch::is_small(t) {
+                small.push(service(t));
+            } else if [
+                crate::topics::MAP,
+                crate::topics::MAP_GRID,
+                crate::topics::NAV_GRID,
+            ]
+            .contains(&t)
+            {
+                high.push(service(t));
+            }
+        }
+        channel_qos(&mut zenoh, &small, &high)?;
         let spec = Spec {
             namespace: namespace.into(),
             ports: cfg.ports.clone(),
@@ -150,7 +171,11 @@ impl Link {
             local,
             limited,
             poll_ms: cfg.link.poll_ms,
-            buffer: cfg.link.buffer,
+            depths: super::watch::service_depths(cfg),
+            rates: RUN_TOPICS
+                .iter()
+                .map(|&t| (t, super::wall_hz(t, cfg, cfg.run.time_scale)))
+                .collect(),
             linger: Duration::from_millis(cfg.link.linger_ms),
         };
         let shared = Arc::new(Shared {

@@ -132,6 +132,73 @@ pub fn zenoh_config(
     Ok(cfg)
 }
 
+/// The zenoh key of the tunnel's channel of the publish-subscribe service `service` (a full
+/// name), any fingerprint: `iox2/v1/channel/<service hash>/*` (the key scheme of
+/// `iceoryx2-integrations-zenoh-link-carrier` 0.10, `src/keys.rs`).
+pub fn channel_key(service: &str) -> Result<String, LinkError> {
+    use iceoryx2::prelude::{MessagingPattern, ServiceName, ipc};
+    use iceoryx2::service::Service;
+    use iceoryx2::service::service_hash::ServiceHash;
+    let name = ServiceName::new(service)
+        .map_err(|e| LinkError::Iceoryx(format!("service name {service}: {e:?}")))?;
+    let hash = ServiceHash::new::<<ipc::Service as Service>::ServiceNameHasher>(
+        &name,
+        MessagingPattern::PublishSubscribe,
+    );
+    Ok(format!("iox2/v1/channel/{}/*", hash.as_str()))
+}
+
+/// zenoh's per-key QoS for the tunnel's channels (`qos/publication`), unless the configuration
+/// sets its own: the services in `small` at priority `interactive_high` with congestion control
+/// `block`, those in `high` at `data_high`, the rest at zenoh's `data`. Each priority has its
+/// own transmit queue, so the fragments of the large samples, which fill the `data` queue when
+/// zenoh's transmit thread falls behind (a loaded machine), no longer make zenoh drop the small
+/// samples queued behind them (issue #35: 4-16 robot states at a time, with every other topic
+/// losing the same 40-160 ms). `block` makes the tunnel thread wait for the queue, never a node.
+pub fn channel_qos(
+    cfg: &mut zenoh::Config,
+    small: &[String],
+    high: &[String],
+) -> Result<(), LinkError> {
+    let zerr = |key: &str, e: &dyn std::fmt::Display| LinkError::ZenohConfig {
+        file: "<tunnel QoS>".into(),
+        key: key.to_string(),
+        reason: e.to_string(),
+    };
+    let key = "qos/publication";
+    if cfg.get_json(key).is_ok_and(|v| v.trim() != "[]") {
+        return Ok(());
+    }
+    let keys = |services: &[String]| -> Result<Vec<String>, LinkError> {
+        services.iter().map(|s| channel_key(s)).collect()
+    };
+    let mut list = Vec::new();
+    if !small.is_empty() {
+        list.push(serde_json::json!({
+            "key_exprs": keys(small)?,
+            "config": { "priority": "interactive_high", "congestion_control": "block" },
+        }));
+    }
+    if !high.is_empty() {
+        list.push(serde_json::json!({
+            "key_exprs": keys(high)?,
+            "config": { "priority": "data_high" },
+        }));
+    }
+    let json = serde_json::to_string(&list).map_err(|e| zerr(key, &e))?;
+    cfg.insert_json5(key, &json).map_err(|e| zerr(key, &e))?;
+    // The data_high queue as deep as the data queue (a 700 KB map is ~11 batches of 64 KB).
+    let depth = cfg
+        .get_json("transport/link/tx/queue/size/data")
+        .map_err(|e| zerr("transport/link/tx/queue/size/data", &e))?;
+    let high_key = "transport/link/tx/queue/size/data_high";
+    if cfg.get_json(high_key).is_ok_and(|v| v.trim() == "2") {
+        cfg.insert_json5(high_key, &depth)
+            .map_err(|e| zerr(high_key, &e))?;
+    }
+    Ok(())
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
@@ -222,5 +289,39 @@ mod tests {
             .unwrap_err()
             .to_string();
         assert!(e.contains("/nonexistent/zenoh.json5"), "{e}");
+    }
+
+    #[test]
+    fn the_small_topics_channels_get_their_own_priority_and_block() {
+        let mut cfg = zenoh_config(None, &[]).unwrap();
+        let small = ["vpsom/main/robot/state".to_string()];
+        let high = ["vpsom/main/map".to_string()];
+        channel_qos(&mut cfg, &small, &high).unwrap();
+        let qos = cfg.get_json("qos/publication").unwrap();
+        let state = channel_key(&small[0]).unwrap();
+        assert!(
+            state.starts_with("iox2/v1/channel/") && state.ends_with("/*"),
+            "{state}"
+        );
+        assert!(qos.contains(&state), "{qos}");
+        assert!(
+            qos.contains("interactive_high") && qos.contains("block"),
+            "{qos}"
+        );
+        assert!(qos.contains(&channel_key(&high[0]).unwrap()), "{qos}");
+        assert_eq!(
+            cfg.get_json("transport/link/tx/queue/size/data_high")
+                .unwrap(),
+            "16"
+        );
+        // A configuration with its own QoS keeps it.
+        let mut own = zenoh::Config::default();
+        own.insert_json5(
+            "qos/publication",
+            r#"[{"key_exprs":["a/b"],"config":{"priority":"data_low"}}]"#,
+        )
+        .unwrap();
+        channel_qos(&mut own, &small, &high).unwrap();
+        assert!(own.get_json("qos/publication").unwrap().contains("a/b"));
     }
 }

@@ -9,7 +9,7 @@
 //! | `bridge.rs` | [`Link`] (start, wait for the peer, quiesce, finish), [`check_overflow`]; without the `link` cargo feature a [`Link`] that refuses to start ([`LinkError::NotBuilt`]) |
 //! | `endpoints.rs` | `--link` endpoints ([`parse_endpoint`]) and the zenoh configuration ([`zenoh_config`]) |
 //! | `tunnel.rs` | the tunnel thread: iceoryx2-link's `Link` over a zenoh carrier, the handshake, peer loss and return |
-//! | `watch.rs` | per topic: samples that crossed, sequence numbers lost, invalid samples ([`RUN_TOPICS`]) |
+//! | `watch.rs` | per topic: published and crossed (sending host), received and lost in the tunnel (receiving host), dropped by the local nodes' subscribers (their heartbeats), invalid samples ([`RUN_TOPICS`]) |
 //! | `throttle.rs` | `[link.max_hz]`: large topics cross through a relay topic `link/<topic>` at a limited rate |
 //!
 //! Where it runs: a thread of the launcher process (`vpsom run`), not a node process. The
@@ -57,6 +57,48 @@ use std::path::PathBuf;
 #[cfg(not(feature = "link"))]
 use std::sync::atomic::AtomicBool;
 use std::time::Duration;
+
+/// How long (wall time) a subscriber sized by [`burst_depth`] may go unread without losing a
+/// sample: samples from another host arrive in bursts, and a loaded 2-CPU machine leaves a
+/// process off the CPU for hundreds of ms (the station recorder's losses of issue #35).
+pub const STALL_S: f64 = 1.0;
+
+/// A large topic's buffers are at most this deep: every slot of a 600 KB frame costs shared
+/// memory for each possible subscriber.
+pub const LARGE_DEPTH_MAX: usize = 8;
+
+/// Samples `topic` brings per wall second in a run at `time_scale`: its configured rate
+/// (`[rates]`, `[planner] lbv_hz`) × the time scale; for a topic `[link.max_hz]` limits, at most
+/// the limit (what crosses). `None` for a topic without a configured rate.
+pub fn wall_hz(topic: &str, cfg: &crate::config::Config, time_scale: f64) -> Option<f64> {
+    use crate::topics;
+    let sim_hz = match topic {
+        topics::DEPTH | topics::DETECTIONS | topics::VISIBILITY => cfg.rates.camera_hz,
+        topics::STATE | topics::TRUTH => cfg.rates.state_hz,
+        topics::MAP | topics::MAP_GRID | topics::NAV_GRID => cfg.rates.map_hz,
+        // At most one per LBV cycle.
+        topics::NECK_GOAL | topics::DEADLINE | topics::NAV_GOAL | topics::DECISION => {
+            cfg.planner.lbv_hz
+        }
+        // Heartbeats are on the wall clock, one stream per node.
+        topics::HEALTH => return Some(cfg.run.health_hz * super::ROLES.len() as f64),
+        _ => return None,
+    };
+    let hz = sim_hz * time_scale;
+    Some(match cfg.link.max_hz.get(topic) {
+        Some(&limit) if limit > 0.0 => hz.min(limit),
+        _ => hz,
+    })
+}
+
+/// The depth that holds [`STALL_S`] of `topic` at `wall_hz`, at least `configured`; a large
+/// topic (`large`) at most [`LARGE_DEPTH_MAX`] (but never below `configured`), any at most 256
+/// (`[ports] subscriber_buffer`'s range).
+pub fn burst_depth(wall_hz: Option<f64>, configured: usize, large: bool) -> usize {
+    let want = wall_hz.map_or(0, |hz| (hz * STALL_S).ceil() as usize);
+    let cap = if large { LARGE_DEPTH_MAX } else { 256 };
+    want.min(cap).max(configured).min(256)
+}
 
 /// `--link` and `--zenoh-config` as given.
 #[derive(Debug, Clone, PartialEq, Eq)]
@@ -136,25 +178,51 @@ pub struct LinkReport {
 }
 
 impl LinkReport {
-    /// Table rows for the run's summary.
+    /// Table rows for the run's summary: the gaps, then per topic its account (see
+    /// [`TopicCount`]), then a warning row per topic that lost samples ([`Self::warnings`]).
+    ///
+    /// Rows: `| link: <topic> out, <hz> Hz: published / crossed / dropped by local subscribers |
+    /// P / C / D (<node> <n>, ...) |` for a topic published here, `| link: <topic> in, <hz> Hz:
+    /// received / lost in the tunnel / dropped by local subscribers | R / L / D (...) |` for one
+    /// from the other host (`-` where a rate-limited topic has no such count).
     pub fn rows(&self) -> String {
         let mut t = String::new();
-        let total: f64 = self.gaps.iter().map(Duration::as_secs_f64).sum();
+        // `+ 0.0`: an empty sum of f64 is -0.0.
+        let total: f64 = self.gaps.iter().map(Duration::as_secs_f64).sum::<f64>() + 0.0;
         t += &format!(
             "| link: times the other host was lost (total s) | {} ({total:.1}) |\n",
             self.gaps.len()
         );
         for c in &self.topics {
-            let dir = if c.inbound {
-                "received"
+            let hz =
+                c.hz.map_or_else(|| "?".to_string(), |hz| format!("{hz:.0}"));
+            let limited = if c.limited { ", rate-limited" } else { "" };
+            let dropped: u64 = c.dropped.iter().map(|d| d.1).sum();
+            let by_node = if c.dropped.is_empty() {
+                String::new()
             } else {
-                "published here"
+                let v: Vec<String> = c.dropped.iter().map(|(n, k)| format!("{n} {k}")).collect();
+                format!(" ({})", v.join(", "))
             };
-            t += &format!("| link: {} samples {dir} | {} |\n", c.topic, c.samples);
             if c.inbound {
+                let lost = if c.limited {
+                    "-".to_string()
+                } else {
+                    c.lost.to_string()
+                };
+                let dropped = if c.limited {
+                    "-".to_string()
+                } else {
+                    dropped.to_string()
+                };
                 t += &format!(
-                    "| link: {} samples lost across the link | {} |\n",
-                    c.topic, c.lost
+                    "| link: {} in, {hz} Hz{limited}: received / lost in the tunnel / dropped by local subscribers | {} / {lost} / {dropped}{by_node} |\n",
+                    c.topic, c.received
+                );
+            } else {
+                t += &format!(
+                    "| link: {} out, {hz} Hz{limited}: published / crossed / dropped by local subscribers | {} / {} / {dropped}{by_node} |\n",
+                    c.topic, c.published, c.crossed
                 );
             }
             if c.invalid > 0 {
@@ -164,21 +232,83 @@ impl LinkReport {
                 );
             }
         }
+        for w in self.warnings() {
+            t += &format!("| link: WARNING | {w} |\n");
+        }
         t
+    }
+
+    /// One line per bridged topic that lost samples, naming the topic and the count: lost in
+    /// the tunnel (inbound), not taken by the tunnel (outbound, not rate-limited), or dropped by
+    /// a local subscriber.
+    pub fn warnings(&self) -> Vec<String> {
+        let mut w = Vec::new();
+        for c in &self.topics {
+            if c.inbound && c.lost > 0 {
+                w.push(format!(
+                    "{}: {} of {} samples lost in the tunnel (sequence gaps)",
+                    c.topic,
+                    c.lost,
+                    c.lost + c.received
+                ));
+            }
+            if !c.inbound && !c.limited && c.published > c.crossed {
+                w.push(format!(
+                    "{}: {} of {} samples published here never reached the tunnel",
+                    c.topic,
+                    c.published - c.crossed,
+                    c.published
+                ));
+            }
+            for (node, n) in &c.dropped {
+                if *n > 0 {
+                    w.push(format!(
+                        "{}: {n} samples dropped by the {node}'s subscriber (overflow)",
+                        c.topic
+                    ));
+                }
+            }
+        }
+        w
+    }
+
+    /// Print [`Self::warnings`] on stderr.
+    pub fn warn(&self) {
+        for w in self.warnings() {
+            eprintln!("link: WARNING: {w}");
+        }
     }
 }
 
-/// What one topic moved, for the report.
-#[derive(Debug, Clone, PartialEq, Eq)]
+/// What one topic moved, for the report. On the host that publishes it (`inbound == false`):
+/// `published` and `crossed` (what the tunnel took to send; `published - crossed` never reached
+/// it); on the other host: `received` and `lost` (the sequence numbers that arrived nowhere);
+/// on both, `dropped` by the local nodes' subscribers. Across the two hosts' summaries, for a
+/// topic that is not rate-limited: `published = received + lost` on the receiving side (every
+/// sequence number is either received or a gap), and a node there read `received - dropped`.
+#[derive(Debug, Clone, PartialEq)]
 pub struct TopicCount {
     /// Topic.
     pub topic: &'static str,
     /// `true`: came from the other host.
     pub inbound: bool,
-    /// Samples seen here (inbound: received over the link; outbound: published here).
-    pub samples: u64,
-    /// Inbound: sequence numbers that never arrived (0 for rate-limited topics).
+    /// Rate-limited (`[link.max_hz]`): crosses through the relay `link/<topic>`.
+    pub limited: bool,
+    /// Its wall rate, Hz (`[rates]` × `[run] time_scale`, at most `[link.max_hz]`).
+    pub hz: Option<f64>,
+    /// Outbound: sequence numbers the publisher here used (summed over its restarts).
+    pub published: u64,
+    /// Outbound: samples the tunnel took to send (its subscriber here received them); for a
+    /// rate-limited topic, the samples the relay copied onto `link/<topic>`.
+    pub crossed: u64,
+    /// Inbound: samples that came over the link (rate-limited: that the relay copied back).
+    pub received: u64,
+    /// Inbound: sequence numbers that never arrived here, before the first arrival and between
+    /// two (0 for a rate-limited topic, whose gaps are the limit's).
     pub lost: u64,
+    /// Per local node subscribed to the topic: samples it lost to overflow (its sequence gaps,
+    /// less those lost in the tunnel). Empty for an inbound rate-limited topic.
+    pub dropped: Vec<(String, u64)>,
     /// Samples that failed validation on receipt here.
     pub invalid: u64,
 }
@@ -213,5 +343,76 @@ impl Link {
     /// Never called: no `Link` exists without the feature.
     pub fn finish(self) -> Result<LinkReport, LinkError> {
         match self {}
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn burst_depths_hold_a_second_within_their_bounds() {
+        assert_eq!(burst_depth(Some(100.0), 16, false), 100);
+        assert_eq!(burst_depth(Some(40.0), 64, false), 64);
+        assert_eq!(burst_depth(Some(1000.0), 2, false), 256);
+        assert_eq!(burst_depth(Some(5.0), 4, true), 5);
+        assert_eq!(burst_depth(Some(10.0), 4, true), LARGE_DEPTH_MAX);
+        assert_eq!(burst_depth(Some(60.0), 12, true), 12);
+        assert_eq!(burst_depth(None, 2, false), 2);
+    }
+
+    #[test]
+    fn the_summary_gives_each_side_of_a_topic_and_warns_of_losses() {
+        let count = |topic, inbound| TopicCount {
+            topic,
+            inbound,
+            limited: false,
+            hz: Some(100.0),
+            published: 0,
+            crossed: 0,
+            received: 0,
+            lost: 0,
+            dropped: Vec::new(),
+            invalid: 0,
+        };
+        let report = LinkReport {
+            topics: vec![
+                TopicCount {
+                    published: 10,
+                    crossed: 9,
+                    dropped: vec![("recorder".into(), 0)],
+                    ..count("robot/state", false)
+                },
+                TopicCount {
+                    received: 7,
+                    lost: 3,
+                    dropped: vec![("recorder".into(), 2)],
+                    ..count("sim/truth", true)
+                },
+            ],
+            gaps: Vec::new(),
+            relayed: 0,
+        };
+        let rows = report.rows();
+        assert!(
+            rows.contains("| link: times the other host was lost (total s) | 0 (0.0) |"),
+            "{rows}"
+        );
+        assert!(
+            rows.contains("| link: robot/state out, 100 Hz: published / crossed / dropped by local subscribers | 10 / 9 / 0 (recorder 0) |"),
+            "{rows}"
+        );
+        assert!(
+            rows.contains("| link: sim/truth in, 100 Hz: received / lost in the tunnel / dropped by local subscribers | 7 / 3 / 2 (recorder 2) |"),
+            "{rows}"
+        );
+        let w = report.warnings();
+        assert_eq!(w.len(), 3, "{w:?}");
+        assert!(w[0].starts_with("robot/state: 1 of 10 "), "{w:?}");
+        assert!(w[1].starts_with("sim/truth: 3 of 10 "), "{w:?}");
+        assert!(
+            w[2].starts_with("sim/truth: 2 samples dropped by the recorder"),
+            "{w:?}"
+        );
     }
 }

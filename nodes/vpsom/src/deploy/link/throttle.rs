@@ -115,7 +115,8 @@ impl<T: Copyable> Relay for Inbound<T> {
 
 /// The relays of a tunnel's limited topics.
 pub struct Throttle {
-    relays: Vec<(String, Box<dyn Relay>)>,
+    /// (topic, relay, samples it copied).
+    relays: Vec<(String, Box<dyn Relay>, u64)>,
     copied: u64,
 }
 
@@ -168,7 +169,7 @@ impl Throttle {
                 crate::topics::MAP => relay::<ObjectMap>(ctx, topic, out, hz)?,
                 other => unreachable!("{other} is not a limitable topic"),
             };
-            relays.push((topic.to_string(), r));
+            relays.push((topic.to_string(), r, 0));
         }
         Ok(Self { relays, copied: 0 })
     }
@@ -176,8 +177,10 @@ impl Throttle {
     /// Copy what is due on every relay.
     pub fn poll(&mut self, now: Instant) -> Result<u64, RelayError> {
         let mut n = 0;
-        for (_, r) in &mut self.relays {
-            n += r.poll(now)?;
+        for (_, r, copied) in &mut self.relays {
+            let k = r.poll(now)?;
+            *copied += k;
+            n += k;
         }
         self.copied += n;
         Ok(n)
@@ -185,11 +188,24 @@ impl Throttle {
 
     /// The earliest time an outbound relay may copy again.
     pub fn next_due(&self) -> Option<Instant> {
-        self.relays.iter().filter_map(|(_, r)| r.next_due()).min()
+        self.relays
+            .iter()
+            .filter_map(|(_, r, _)| r.next_due())
+            .min()
     }
 
     /// Samples copied so far (both directions).
     pub fn copied(&self) -> u64 {
         self.copied
+    }
+
+    /// Samples the relay of `topic` copied so far (outbound: onto `link/<topic>`, i.e. the
+    /// samples that crossed; inbound: back onto `topic` here, i.e. the samples received).
+    pub fn copied_of(&self, topic: &str) -> u64 {
+        self.relays
+            .iter()
+            .filter(|(t, _, _)| t == topic)
+            .map(|(_, _, n)| n)
+            .sum()
     }
 }

@@ -100,9 +100,10 @@ fn all_bridged(link: &ZenohLink, allow: &HashSet<String>) -> Result<bool, LinkEr
 
 /// Run the tunnel until `shared.stop`, then for `linger` more; returns what it moved.
 pub(super) fn run(spec: Spec, shared: Arc<Shared>) -> Result<LinkReport, LinkError> {
-    let ports = super::watch::tunnel_ports(&spec.ports, spec.buffer);
+    let ports = super::watch::tunnel_ports(&spec.ports, &spec.depths);
     let ctx = PortContext::with_namespace(&ports, "link-ports", &spec.namespace)?;
-    let mut watch = Watch::new(&ctx, &spec.local, &spec.limited_topics())?;
+    let rate = |topic: &str| spec.rates.iter().find(|r| r.0 == topic).and_then(|r| r.1);
+    let mut watch = Watch::new(&ctx, &spec.local, &spec.limited_topics(), rate)?;
     let mut throttle = Throttle::new(&ctx, &spec.limited, &spec.local)?;
 
     let (session, mut link) = open_link(spec.zenoh.clone(), &spec.allow, &spec.ports)?;
@@ -260,6 +261,10 @@ pub(super) fn run(spec: Spec, shared: Arc<Shared>) -> Result<LinkReport, LinkErr
     if let Some(t) = peer_lost_at {
         gaps.push(t.elapsed());
     }
+    // What arrived since the last pass (the nodes' final heartbeats among it).
+    if let Err(e) = watch.poll(Instant::now()) {
+        errors.log("watching the topics", &e, Instant::now());
+    }
     drop(guards);
     drop(token);
     drop(link);
@@ -267,9 +272,11 @@ pub(super) fn run(spec: Spec, shared: Arc<Shared>) -> Result<LinkReport, LinkErr
     if let Err(e) = session.close().wait() {
         eprintln!("link: closing the zenoh session: {e}");
     }
-    Ok(LinkReport {
-        topics: watch.counts(),
+    let report = LinkReport {
+        topics: watch.counts(|t| throttle.copied_of(t)),
         gaps,
         relayed: throttle.copied(),
-    })
+    };
+    report.warn();
+    Ok(report)
 }
