@@ -160,6 +160,7 @@ pub struct FrameStats {
 impl std::ops::AddAssign for FrameStats {
     fn add_assign(&mut self, o: Self) {
         self.skipped |= o.skipped;
+        self.levelled |= o.levelled;
         self.used += o.used;
         self.associated += o.associated;
         self.created += o.created;

@@ -622,9 +622,10 @@ fn orbit_cmd(config: Option<PathBuf>, cmd: OrbitCmd) -> anyhow::Result<ExitCode>
     let r = vpsom::orbit::run_orbit(&spec)?;
     let table = r.table();
     println!("{table}");
-    let bad = r.regressions(0.02, 0.0);
+    // Centre errors within half an object voxel (`[mapper] object_voxel` = 1 cm) are equal.
+    let bad = r.regressions(0.02, 0.005);
     let verdict = if bad.is_empty() {
-        "every object with ≥ 50 visible px: IoU after the last lap ≥ the first's − 0.02, centre error not grown\n".to_string()
+        "every object with ≥ 50 visible px: IoU after the last lap ≥ the first's − 0.02, centre error not grown by more than 5 mm\n".to_string()
     } else {
         format!(
             "worse after the last lap than after the first:\n- {}\n",
