@@ -64,6 +64,9 @@ pub struct MappedObject {
     /// refit never makes the cuboid smaller than it. A voxel cloud only grows, so the
     /// predecessor's would have held it; the resumed one holds only its 64 sample points.
     pub restored: Option<Box3>,
+    /// Restored from a map whose height was fused from views ([`super::extent`]): that height,
+    /// published until this mapper's own views fuse one.
+    pub restored_height: Option<f32>,
     /// SOPM (foreground objects).
     pub sopm: Option<Sopm>,
     /// Associated detections.
@@ -124,6 +127,7 @@ impl MappedObject {
             },
             support_height: None,
             restored: None,
+            restored_height: None,
             sopm: sopm.map(Sopm::new),
             observations: 0,
             first_seen_ns: now_ns,

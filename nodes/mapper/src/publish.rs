@@ -110,12 +110,18 @@ impl Mapper {
         if o.background || !self.cfg.extensions.view_extents {
             return o.cuboid.size;
         }
-        o.views.size(
-            o.cuboid.size,
-            o.cuboid.yaw,
-            self.cfg.support_margin,
-            &self.cfg.view_extents,
-        )
+        let ve = &self.cfg.view_extents;
+        let mut size = o
+            .views
+            .size(o.cuboid.size, o.cuboid.yaw, self.cfg.support_margin, ve);
+        // A restored object publishes its predecessor's fused height until its views fuse one.
+        if let Some(h) = o.restored_height
+            && ve.height
+            && o.views.fused_height(ve).is_none()
+        {
+            size.z = size.z.min(h);
+        }
+        size
     }
 
     /// The centre an object is published with: with `[mapper.view_extents] centre` a foreground

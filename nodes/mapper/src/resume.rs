@@ -58,11 +58,24 @@ impl Mapper {
                 let p = Vec3::from_array(*p);
                 o.merge(&[p], p - Vec3::from_array(*los));
             }
-            o.cuboid = Box3 {
+            let mut cuboid = Box3 {
                 center: Vec3::from_array(m.center),
                 size: Vec3::from_array(m.size),
                 yaw: m.yaw,
             };
+            // A fused height ([`super::extent`]) is published with the bottom kept; the
+            // cuboid the mapper works with spans its merged cloud, whose top the samples show.
+            let top = m
+                .samples()
+                .map(|(p, _)| p[2])
+                .fold(f32::NEG_INFINITY, f32::max);
+            let bottom = cuboid.center.z - 0.5 * cuboid.size.z;
+            if fg && top > bottom + cuboid.size.z {
+                o.restored_height = Some(cuboid.size.z);
+                cuboid.size.z = top - bottom;
+                cuboid.center.z = bottom + 0.5 * cuboid.size.z;
+            }
+            o.cuboid = cuboid;
             o.restored = Some(o.cuboid);
             o.observations = m.observations;
             o.point_count = m.point_count;
