@@ -429,8 +429,9 @@ impl Drop for Launcher {
 }
 
 fn start(spec: &ChildSpec, restarts: u32) -> Result<Child, LaunchError> {
-    Command::new(&spec.program)
-        .args(&spec.args)
+    let mut cmd = Command::new(&spec.program);
+    crate::os::default_stop_signals_on_exec(&mut cmd);
+    cmd.args(&spec.args)
         .env(RESTART_ENV, restarts.to_string())
         .stdin(Stdio::null())
         .stdout(if spec.inherit_stdout {

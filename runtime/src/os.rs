@@ -373,6 +373,26 @@ pub fn fs_space(path: &std::path::Path) -> io::Result<(u64, u64)> {
     Ok((st.f_blocks as u64 * frsize, st.f_bavail as u64 * frsize))
 }
 
+/// Make `cmd`'s child start with the default action for SIGINT and SIGTERM, the signals a
+/// launcher stops it with. A process started in the background by a non-interactive shell
+/// (`vpsom run ... &` in a script, `nohup`) has SIGINT ignored, and an ignored signal is
+/// inherited across `exec` and cannot even be trapped by `sh`: its children would only ever
+/// end by SIGKILL, a recorder without finishing its file.
+pub fn default_stop_signals_on_exec(cmd: &mut std::process::Command) {
+    use std::os::unix::process::CommandExt;
+    // SAFETY: between fork and exec only `signal`, which is async-signal-safe, is called.
+    unsafe {
+        cmd.pre_exec(|| {
+            for sig in [libc::SIGINT, libc::SIGTERM] {
+                if libc::signal(sig, libc::SIG_DFL) == libc::SIG_ERR {
+                    return Err(io::Error::last_os_error());
+                }
+            }
+            Ok(())
+        });
+    }
+}
+
 /// Send signal `sig` (e.g. `libc::SIGINT`) to process `pid`.
 pub fn send_signal(pid: u32, sig: i32) -> io::Result<()> {
     let pid =
