@@ -517,15 +517,21 @@ fn mapper_across_the_link_gets_each_frame_with_its_detections() {
     assert!(crossed(&depth) > 0, "{so_a}");
     assert_eq!(crossed(&depth), crossed(&dets), "{so_a}");
     let integrated = row(&so_b, "depth frames integrated by the mapper").unwrap();
-    let unmatched = row(&so_b, "frames skipped by the mapper (no matching detections)").unwrap();
+    let unmatched = row(
+        &so_b,
+        "frames skipped by the mapper (no matching detections)",
+    )
+    .unwrap();
     println!("station mapper: {integrated} frames integrated, {unmatched} without detections");
     assert!(integrated > 0.0, "{so_b}");
     // The pairs that were still crossing when the mapper stopped may miss their detections.
-    assert!(unmatched <= 2.0, "{unmatched} of {integrated} frames unmatched\n{so_b}");
+    assert!(
+        unmatched <= 2.0,
+        "{unmatched} of {integrated} frames unmatched\n{so_b}"
+    );
     nothing_in_the_default_domain(&ns);
     let _ = std::fs::remove_dir_all(&dir);
 }
-
 
 fn pump(mut from: TcpStream, mut to: TcpStream) {
     std::thread::spawn(move || {
