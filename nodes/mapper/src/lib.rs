@@ -445,21 +445,29 @@ impl Mapper {
     }
 
     /// Every pair of foreground objects hit in this frame (each by its own detection) was
-    /// detected together once more.
+    /// detected together once more, unless the two detections' points overlap by more
+    /// than `co_detection_max_overlap` of the smaller bounds (two boxes on one object).
     fn count_co_detections(&mut self) {
-        let hit: Vec<u32> = self
+        let hit: Vec<(u32, Option<(Vec3, Vec3)>)> = self
             .objects
             .iter()
             .filter(|o| o.hit && !o.background)
-            .map(|o| o.id)
+            .map(|o| (o.id, o.hit_bounds))
             .collect();
         if hit.len() < 2 {
             return;
         }
+        let max_overlap = self.cfg.co_detection_max_overlap;
         for o in self.objects.iter_mut().filter(|o| o.hit && !o.background) {
             let me = o.id;
-            for &id in hit.iter().filter(|&&id| id != me) {
-                o.add_co_seen(id, 1);
+            for &(id, bounds) in hit.iter().filter(|&&(id, _)| id != me) {
+                let one_object = match (o.hit_bounds, bounds) {
+                    (Some(a), Some(b)) => bounds_overlap(a, b) > max_overlap,
+                    _ => false,
+                };
+                if !one_object {
+                    o.add_co_seen(id, 1);
+                }
             }
         }
     }
@@ -704,6 +712,7 @@ impl Mapper {
                     let centroid = pts.iter().copied().sum::<Vec3>() / pts.len() as f32;
                     self.yaw_cal.record(o.id, centroid, cam_pos);
                 }
+                o.hit_bounds = point_bounds(&pts);
                 o.merge(&pts, cam_pos);
                 let dyaw = o.refit(&mut self.cuboid_scratch, &mut self.centroids, &fit);
                 if fg {
@@ -730,9 +739,78 @@ impl Mapper {
     }
 }
 
+/// The axis-aligned bounds (min, max) of `pts`, `None` when empty.
+fn point_bounds(pts: &[Vec3]) -> Option<(Vec3, Vec3)> {
+    let first = *pts.first()?;
+    Some(
+        pts.iter()
+            .fold((first, first), |(lo, hi), p| (lo.min(*p), hi.max(*p))),
+    )
+}
+
+/// The intersection of two bounds as a fraction of the smaller one's volume (0 when apart; a
+/// degenerate bounds counts as a 1 mm slab).
+fn bounds_overlap(a: (Vec3, Vec3), b: (Vec3, Vec3)) -> f32 {
+    let vol = |lo: Vec3, hi: Vec3| (hi - lo).max(Vec3::splat(1e-3)).element_product();
+    let (lo, hi) = (a.0.max(b.0), a.1.min(b.1));
+    if lo.cmpgt(hi).any() {
+        return 0.0;
+    }
+    vol(lo, hi) / vol(a.0, a.1).min(vol(b.0, b.1))
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    #[test]
+    fn bounds_overlap_is_the_intersection_over_the_smaller_volume() {
+        let b = |lo: [f32; 3], hi: [f32; 3]| (Vec3::from(lo), Vec3::from(hi));
+        // A 0.1 m cube half inside a 0.2 m cube: 0.05 x 0.1 x 0.1 / 0.001 = 0.5.
+        let small = b([0.15, 0.0, 0.0], [0.25, 0.1, 0.1]);
+        let large = b([0.0, 0.0, 0.0], [0.2, 0.2, 0.2]);
+        assert!((bounds_overlap(small, large) - 0.5).abs() < 1e-5);
+        assert!((bounds_overlap(large, small) - 0.5).abs() < 1e-5);
+        // Inside: 1; apart: 0.
+        assert!((bounds_overlap(b([0.05; 3], [0.1; 3]), large) - 1.0).abs() < 1e-5);
+        assert_eq!(bounds_overlap(b([0.3; 3], [0.4; 3]), large), 0.0);
+        assert_eq!(point_bounds(&[]), None);
+        let pts = [Vec3::new(1.0, -1.0, 0.5), Vec3::new(0.0, 2.0, 0.25)];
+        assert_eq!(
+            point_bounds(&pts),
+            Some((Vec3::new(0.0, -1.0, 0.25), Vec3::new(1.0, 2.0, 0.5)))
+        );
+    }
+
+    #[test]
+    fn two_boxes_on_one_object_are_not_detected_together() {
+        let cam = Camera::from_fov(64, 48, 60.0, 46.8, 0.5, 5.0);
+        let cfg = MapperConfig::default();
+        let mut m = Mapper::new(&cfg, &cam).unwrap();
+        let object = |id, lo: f32, hi: f32| {
+            let mut o = MappedObject::new(id, 41, 0.9, false, 0.01, 100, None, 0);
+            o.hit = true;
+            o.hit_bounds = Some((Vec3::splat(lo), Vec3::splat(hi)));
+            o
+        };
+        // 0 and 1: the same cup's points (overlap 1); 2: a cup beside them.
+        m.objects = vec![
+            object(0, 0.0, 0.1),
+            object(1, 0.02, 0.09),
+            object(2, 0.3, 0.4),
+        ];
+        m.count_co_detections();
+        let seen = |m: &Mapper, a: usize, b: u32| m.objects[a].co_seen_with(b);
+        assert_eq!((seen(&m, 0, 1), seen(&m, 1, 0)), (0, 0));
+        assert_eq!((seen(&m, 0, 2), seen(&m, 2, 1)), (1, 1));
+        // With every pair counted (1.0), the two boxes are detected together too.
+        let mut every = cfg.clone();
+        every.co_detection_max_overlap = 1.0;
+        let mut m2 = Mapper::new(&every, &cam).unwrap();
+        m2.objects = m.objects.clone();
+        m2.count_co_detections();
+        assert_eq!(seen(&m2, 0, 1), 1);
+    }
 
     #[test]
     fn mismatched_inputs_are_refused_and_lost_localization_skips() {
