@@ -58,6 +58,11 @@ pub struct MapperConfig {
     /// `[mapper.extensions] co_detection`: two foreground objects detected together (each by
     /// its own detection of one frame) in at least this many frames are never merged.
     pub distinct_after: u32,
+    /// `[mapper.extensions] co_detection`: two detections of one frame whose points' bounds
+    /// overlap by more than this fraction of the smaller bounds' volume saw one object (a
+    /// mislocalised duplicate box) and are not counted as detected together (1: every pair
+    /// counts).
+    pub co_detection_max_overlap: f32,
     /// Sparse fallback (`[mapper.extensions] sparse_fallback`).
     pub sparse: SparseConfig,
     /// Flat objects (`[mapper.extensions] flat_objects`).
@@ -458,6 +463,7 @@ impl MapperConfig {
             [merge_containment, min_score]: in_range(0.0, 1.0),
             cross_merge_iou: in_range(0.01, 1.0),
             distinct_after: count(1, 1_000_000),
+            co_detection_max_overlap: in_range(0.0, 1.0),
             [view_extents, flat, sparse, existence, segmentation, association, sopm]: section,
             [registration, grid, level, yaw_calibration]: section,
         });

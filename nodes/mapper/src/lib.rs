@@ -445,21 +445,29 @@ impl Mapper {
     }
 
     /// Every pair of foreground objects hit in this frame (each by its own detection) was
-    /// detected together once more.
+    /// detected together once more, unless the two detections' points overlap by more
+    /// than `co_detection_max_overlap` of the smaller bounds (two boxes on one object).
     fn count_co_detections(&mut self) {
-        let hit: Vec<u32> = self
+        let hit: Vec<(u32, Option<(Vec3, Vec3)>)> = self
             .objects
             .iter()
             .filter(|o| o.hit && !o.background)
-            .map(|o| o.id)
+            .map(|o| (o.id, o.hit_bounds))
             .collect();
         if hit.len() < 2 {
             return;
         }
+        let max_overlap = self.cfg.co_detection_max_overlap;
         for o in self.objects.iter_mut().filter(|o| o.hit && !o.background) {
             let me = o.id;
-            for &id in hit.iter().filter(|&&id| id != me) {
-                o.add_co_seen(id, 1);
+            for &(id, bounds) in hit.iter().filter(|&&(id, _)| id != me) {
+                let one_object = match (o.hit_bounds, bounds) {
+                    (Some(a), Some(b)) => bounds_overlap(a, b) > max_overlap,
+                    _ => false,
+                };
+                if !one_object {
+                    o.add_co_seen(id, 1);
+                }
             }
         }
     }
@@ -704,6 +712,7 @@ impl Mapper {
                     let centroid = pts.iter().copied().sum::<Vec3>() / pts.len() as f32;
                     self.yaw_cal.record(o.id, centroid, cam_pos);
                 }
+                o.hit_bounds = point_bounds(&pts);
                 o.merge(&pts, cam_pos);
                 let dyaw = o.refit(&mut self.cuboid_scratch, &mut self.centroids, &fit);
                 if fg {
@@ -728,6 +737,23 @@ impl Mapper {
         self.assignment = assignment;
         corr
     }
+}
+
+/// The axis-aligned bounds (min, max) of `pts`, `None` when empty.
+fn point_bounds(pts: &[Vec3]) -> Option<(Vec3, Vec3)> {
+    let first = *pts.first()?;
+    Some(pts.iter().fold((first, first), |(lo, hi), p| (lo.min(*p), hi.max(*p))))
+}
+
+/// The intersection of two bounds as a fraction of the smaller one's volume (0 when apart; a
+/// degenerate bounds counts as a 1 mm slab).
+fn bounds_overlap(a: (Vec3, Vec3), b: (Vec3, Vec3)) -> f32 {
+    let vol = |lo: Vec3, hi: Vec3| (hi - lo).max(Vec3::splat(1e-3)).element_product();
+    let (lo, hi) = (a.0.max(b.0), a.1.min(b.1));
+    if lo.cmpgt(hi).any() {
+        return 0.0;
+    }
+    vol(lo, hi) / vol(a.0, a.1).min(vol(b.0, b.1))
 }
 
 #[cfg(test)]

@@ -86,6 +86,8 @@ pub struct MappedObject {
     pub existence: f32,
     /// Associated with a detection in the current frame.
     pub hit: bool,
+    /// Bounds (min, max) of the points that detection gave, while `hit`.
+    pub hit_bounds: Option<(Vec3, Vec3)>,
     /// Camera position of the newest existence update.
     pub last_view: Option<Vec3>,
     /// Viewpoints whose existence update was a hit ([`super::existence`]).
@@ -136,6 +138,7 @@ impl MappedObject {
             point_count: 0,
             existence: 0.0,
             hit: false,
+            hit_bounds: None,
             last_view: None,
             hit_views: 0,
             views: Default::default(),

@@ -195,12 +195,12 @@ pub struct LinkConfig {
     /// Samples the tunnel's own subscribers buffer per small topic (see `link::watch`).
     pub buffer: usize,
     /// Per-topic rate limit across the link (Hz, 0 = every sample), for the large topics
-    /// (`depth`, `map`).
+    /// (`depth`, `detections`, `map`).
     pub max_hz: std::collections::BTreeMap<String, f64>,
 }
 
 /// Topics `[link.max_hz]` may limit: the large ones, which cross through a relay.
-pub const LINK_LIMITABLE: [&str; 2] = ["depth", "map"];
+pub const LINK_LIMITABLE: [&str; 3] = ["depth", "detections", "map"];
 
 impl Default for LinkConfig {
     /// The `[link]` section of the built-in `config/default.toml`.
@@ -226,9 +226,22 @@ impl LinkConfig {
                 LINK_LIMITABLE.contains(&topic.as_str()),
                 &settings::key!(c, max_hz),
                 topic,
-                "only depth and map can be rate-limited",
+                "only depth, detections and map can be rate-limited",
             )?;
             c.in_range(&max_hz.key(topic), hz, 0.0, 1000.0)?;
+        }
+        // Detections cross with their frame when both are limited (the mapper pairs them).
+        let limit = |t: &str| self.max_hz.get(t).copied().filter(|&hz| hz > 0.0);
+        if let (Some(depth), Some(dets)) = (limit("depth"), limit("detections")) {
+            c.require(
+                dets == depth,
+                &max_hz.key("detections"),
+                dets,
+                &format!(
+                    "must equal depth's limit ({depth}): limited together, a frame and its \
+                     detections cross as one pair"
+                ),
+            )?;
         }
         Ok(())
     }

@@ -85,3 +85,20 @@ fn bad_mapper_values_name_the_key() {
     let e = Config::parse(f, "[mapper.grid]\nwidth = 512\n").unwrap_err();
     assert_eq!(e.key(), "mapper.grid.height");
 }
+
+#[test]
+fn link_rate_limits_name_the_topic_and_pair_detections_with_depth() {
+    let f = Path::new("robot.toml");
+    let e = Config::parse(f, "[link.max_hz]\nstate = 5.0\n").unwrap_err();
+    assert_eq!(e.key(), "link.max_hz", "{e}");
+    assert!(e.to_string().contains("state"), "{e}");
+    // Detections alone, or at depth's rate: accepted.
+    let c = Config::parse(f, "[link.max_hz]\ndepth = 0.0\ndetections = 5.0\n").unwrap();
+    assert_eq!(c.link.max_hz["detections"], 5.0);
+    Config::parse(f, "[link.max_hz]\ndepth = 5.0\ndetections = 5.0\n").unwrap();
+    // Both limited at different rates: refused, naming detections and depth's value.
+    let e = Config::parse(f, "[link.max_hz]\ndepth = 10.0\ndetections = 5.0\n").unwrap_err();
+    assert_eq!(e.key(), "link.max_hz.detections", "{e}");
+    let text = e.to_string();
+    assert!(text.contains("robot.toml") && text.contains("10"), "{text}");
+}

@@ -13,6 +13,9 @@
 //! deep enough that no recorder loses a sample to the bursts in which samples come over TCP.
 //! - `planner_across_the_link_drives_the_robot`: the planner in domain B; its goals cross back,
 //!   the robot maps, and the session terminates.
+//! - `mapper_across_the_link_gets_each_frame_with_its_detections`: the mapper in domain B, depth
+//!   and detections limited to one rate (`[link.max_hz]`): they cross as pairs, and the mapper
+//!   finds the detections of every frame it gets.
 //! - `a_cut_link_is_counted_and_traffic_resumes`: the TCP connection between the hosts goes
 //!   through a proxy this test cuts for a few seconds: both runs go on and terminate, B logs the
 //!   loss and the return, counts the gap and the samples lost, and depth frames cross at most
@@ -446,6 +449,83 @@ impl Proxy {
         self.up.store(true, Ordering::Relaxed);
     }
 }
+
+#[test]
+fn mapper_across_the_link_gets_each_frame_with_its_detections() {
+    let _one = SERIAL.lock().unwrap_or_else(|e| e.into_inner());
+    let dir = scratch("map");
+    let pid = std::process::id();
+    let ns = format!("lk{pid}m");
+    let port = free_port();
+    // Depth and detections limited together: they cross as pairs (a frame and its detections).
+    const PAIR_HZ: f64 = 5.0;
+    let limit = format!("[link.max_hz]\ndepth = {PAIR_HZ}\ndetections = {PAIR_HZ}\n");
+    let a = host_config(
+        &dir,
+        "a",
+        &format!("l{pid}ma"),
+        &format!("[link]\n{LINK_BUFFER}wait_for_peer_s = 120.0\n{limit}"),
+    );
+    let b = host_config(
+        &dir,
+        "b",
+        &format!("l{pid}mb"),
+        &format!("[link]\n{LINK_BUFFER}{limit}"),
+    );
+    let (out_a, out_b) = (dir.join("robot"), dir.join("station"));
+    let station = Run::start(
+        "station",
+        &b,
+        &[
+            "--nodes",
+            "mapper",
+            "--ns",
+            &ns,
+            "--out",
+            out_b.to_str().unwrap(),
+            "--link",
+            &format!("listen:tcp/127.0.0.1:{port}"),
+        ],
+    );
+    let robot = Run::start(
+        "robot",
+        &a,
+        &[
+            "--nodes",
+            "sim,planner,recorder",
+            "--ns",
+            &ns,
+            "--out",
+            out_a.to_str().unwrap(),
+            "--link",
+            &format!("tcp/127.0.0.1:{port}"),
+        ],
+    );
+    let (ok_a, so_a, se_a) = robot.wait();
+    let (ok_b, so_b, se_b) = station.wait();
+    assert!(ok_a, "robot failed:\n{so_a}\n{se_a}");
+    assert!(ok_b, "station failed:\n{so_b}\n{se_b}");
+    // The robot scored a map the station's mapper made from the pairs that crossed.
+    let m = metrics(&out_a);
+    assert!(m["objects_estimated"].as_u64().unwrap() > 0, "{m}\n{se_a}");
+    // As many detections crossed as frames, and the mapper found the detections of every
+    // frame it got (independent newest-first relays would leave most frames unmatched).
+    let depth = account(&so_a, "depth", "out").expect("robot's depth account");
+    let dets = account(&so_a, "detections", "out").expect("robot's detections account");
+    println!("robot: depth {depth:?}, detections {dets:?}");
+    let crossed = |a: &Account| a.counts[1].expect("crossed is counted");
+    assert!(crossed(&depth) > 0, "{so_a}");
+    assert_eq!(crossed(&depth), crossed(&dets), "{so_a}");
+    let integrated = row(&so_b, "depth frames integrated by the mapper").unwrap();
+    let unmatched = row(&so_b, "frames skipped by the mapper (no matching detections)").unwrap();
+    println!("station mapper: {integrated} frames integrated, {unmatched} without detections");
+    assert!(integrated > 0.0, "{so_b}");
+    // The pairs that were still crossing when the mapper stopped may miss their detections.
+    assert!(unmatched <= 2.0, "{unmatched} of {integrated} frames unmatched\n{so_b}");
+    nothing_in_the_default_domain(&ns);
+    let _ = std::fs::remove_dir_all(&dir);
+}
+
 
 fn pump(mut from: TcpStream, mut to: TcpStream) {
     std::thread::spawn(move || {

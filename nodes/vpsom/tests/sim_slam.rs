@@ -45,12 +45,12 @@ fn tour_with(cfg: &Config, seed: u64, seconds: f32) -> (Vec<f32>, Vec<(Vec3, Vec
         if s.nav_status != nav_status::MOVING {
             let g = goals[next % goals.len()];
             next += 1;
-            sim.set_nav_goal(&NavGoal {
+            // A goal the navigation refuses (its cell blocked on the estimated map) is skipped.
+            let _ = sim.set_nav_goal(&NavGoal {
                 goal_id: next as u64,
                 pose: g,
                 ..Default::default()
-            })
-            .unwrap();
+            });
         }
         let [x, y, yaw] = s.base_pose;
         sim.set_neck_goal(&NeckGoal {
@@ -101,7 +101,6 @@ fn aligned_ate(track: &[(Vec3, Vec3)]) -> f64 {
 /// a SLAM system tracking the camera has neither, and the TUM tool interpolates the ground truth
 /// to the image stamps). Printed with the robot's full camera-pose error for comparison.
 #[test]
-#[ignore = "with the 6-DoF error of issue #33 this tour's goal planning fails (NoPath at (-2.74, -1.45)) before the ATE is measured: to be re-done with the 3-D re-calibration (issue #33)"]
 fn the_slam_part_of_the_error_matches_orb_slam2_on_tum_desk_sequences() {
     let mut slam_only = config();
     slam_only.robot.neck_encoder_bias_deg = 0.0;
@@ -142,7 +141,6 @@ fn rmse(e: &[f32]) -> f32 {
 }
 
 #[test]
-#[ignore = "the SLAM sigmas were calibrated to ORB-SLAM2's ATE with the error in the plane; with the 6-DoF error of issue #33 the tour's ATE is 5.5 cm (bound 5 cm): re-calibration in 3-D is open (issue #33)"]
 fn a_tour_has_orb_slam2_class_ate_and_no_pull_to_the_truth() {
     for seed in [1, 2, 3] {
         let (e, sim) = tour(seed, 60.0);
@@ -282,3 +280,4 @@ fn the_neck_yaw_in_the_camera_pose_carries_encoder_noise() {
     // The state reports the encoder reading too, not the true neck yaw.
     assert!(reported.iter().all(|&x| x != 0.0));
 }
+

@@ -30,9 +30,11 @@ impl Range {
     }
 
     fn label(&self, scale: f64) -> String {
+        // Scaled bounds print without the binary fraction's tail (0.07 * 100 = 7.000000000000001).
+        let show = |v: f64| format!("{}", (v * scale * 1e6).round() / 1e6);
         match self.max {
-            Some(m) => format!("{}–{}", self.min * scale, m * scale),
-            None => format!("≥ {}", self.min * scale),
+            Some(m) => format!("{}–{}", show(self.min), show(m)),
+            None => format!("≥ {}", show(self.min)),
         }
     }
 }

@@ -5,10 +5,16 @@
 //! frames that crossed as the producer numbered them. Either copy validates the sample first
 //! (it is received through a [`Subscriber`]). A slow link then carries at most
 //! `max_hz × size` bytes a second of that topic, and the robot's publisher never waits for it.
+//!
+//! Detections belong to a frame (`frame_seq`): a consumer across the link (the mapper) pairs
+//! them. When both `depth` and `detections` are limited and published on this host, one relay
+//! carries them as pairs: at each due time the newest detections and the frame they belong to
+//! (a frame is published before its detections, so it is already there).
 
 use super::LinkError;
 use runtime::ports::{PortContext, Publisher, ReceiveError, SendError, Subscriber};
-use shm_types::{DepthFrame, Message, ObjectMap};
+use shm_types::{DepthFrame, Detections, Message, ObjectMap, mask_mode};
+use std::collections::BTreeMap;
 use std::time::{Duration, Instant};
 
 /// Name of the bridged relay topic of a limited topic.
@@ -34,16 +40,36 @@ impl Copyable for DepthFrame {
     }
 }
 
+impl Copyable for Detections {
+    fn copy_into(&self, dst: &mut Self) {
+        dst.header = self.header;
+        dst.frame_seq = self.frame_seq;
+        dst.width = self.width;
+        dst.height = self.height;
+        dst.count = self.count;
+        dst.masks = self.masks;
+        let n = self.detections().len();
+        dst.items[..n].copy_from_slice(self.detections());
+        if self.masks == mask_mode::MASKS {
+            dst.label_pixels_mut().copy_from_slice(self.label_pixels());
+        }
+    }
+}
+
 impl Copyable for ObjectMap {
     fn copy_into(&self, dst: &mut Self) {
         dst.copy_from(self);
     }
 }
 
-/// One direction of one limited topic.
+/// One direction of one limited topic (or of a frame and its detections).
 trait Relay {
-    /// Copy what is due; returns the samples copied.
-    fn poll(&mut self, now: Instant) -> Result<u64, RelayError>;
+    /// Copy what is due, counting each copied sample under its topic in `copied`.
+    fn poll(
+        &mut self,
+        now: Instant,
+        copied: &mut BTreeMap<&'static str, u64>,
+    ) -> Result<(), RelayError>;
     /// When the next copy may be due (outbound), if it waits for time.
     fn next_due(&self) -> Option<Instant>;
 }
@@ -62,8 +88,17 @@ pub enum RelayError {
     Send(#[from] SendError),
 }
 
+/// Copy `s` into a loan of `to` and send it with its own header.
+fn forward<T: Copyable>(s: &T, to: &Publisher<T>) -> Result<(), RelayError> {
+    let mut loan = to.loan()?;
+    s.copy_into(&mut loan);
+    loan.send_relayed()?;
+    Ok(())
+}
+
 /// Here → `link/T`: the newest sample of `T`, at most every `period`.
 struct Outbound<T: Copyable> {
+    topic: &'static str,
     from: Subscriber<T>,
     to: Publisher<T>,
     period: Duration,
@@ -71,18 +106,80 @@ struct Outbound<T: Copyable> {
 }
 
 impl<T: Copyable> Relay for Outbound<T> {
-    fn poll(&mut self, now: Instant) -> Result<u64, RelayError> {
+    fn poll(
+        &mut self,
+        now: Instant,
+        copied: &mut BTreeMap<&'static str, u64>,
+    ) -> Result<(), RelayError> {
         if now < self.next {
-            return Ok(0);
+            return Ok(());
         }
         let Some(s) = self.from.latest()? else {
-            return Ok(0);
+            return Ok(());
         };
-        let mut loan = self.to.loan()?;
-        s.copy_into(&mut loan);
-        loan.send_relayed()?;
+        forward(&*s, &self.to)?;
+        *copied.entry(self.topic).or_default() += 1;
         self.next = now + self.period;
-        Ok(1)
+        Ok(())
+    }
+
+    fn next_due(&self) -> Option<Instant> {
+        Some(self.next)
+    }
+}
+
+/// Here → `link/depth` and `link/detections`: the newest detections and their frame, at most
+/// every `period`. Detections whose frame is no longer in `frames`' buffer do not cross.
+struct FramePairs {
+    dets: Subscriber<Detections>,
+    frames: Subscriber<DepthFrame>,
+    dets_to: Publisher<Detections>,
+    frames_to: Publisher<DepthFrame>,
+    /// A frame newer than the detections last looked at, kept for its own detections.
+    held: Option<runtime::ports::Received<DepthFrame>>,
+    period: Duration,
+    next: Instant,
+}
+
+impl Relay for FramePairs {
+    fn poll(
+        &mut self,
+        now: Instant,
+        copied: &mut BTreeMap<&'static str, u64>,
+    ) -> Result<(), RelayError> {
+        if now < self.next {
+            return Ok(());
+        }
+        let Some(d) = self.dets.latest()? else {
+            return Ok(());
+        };
+        let frame = loop {
+            let f = match self.held.take() {
+                Some(f) => f,
+                None => match self.frames.receive()? {
+                    Some(f) => f,
+                    None => break None,
+                },
+            };
+            match f.header.seq.cmp(&d.frame_seq) {
+                std::cmp::Ordering::Less => continue,
+                std::cmp::Ordering::Equal => break Some(f),
+                std::cmp::Ordering::Greater => {
+                    self.held = Some(f);
+                    break None;
+                }
+            }
+        };
+        let Some(f) = frame else {
+            return Ok(());
+        };
+        // The frame first: the consumer waits for a frame's detections, not the reverse.
+        forward(&*f, &self.frames_to)?;
+        forward(&*d, &self.dets_to)?;
+        *copied.entry(crate::topics::DEPTH).or_default() += 1;
+        *copied.entry(crate::topics::DETECTIONS).or_default() += 1;
+        self.next = now + self.period;
+        Ok(())
     }
 
     fn next_due(&self) -> Option<Instant> {
@@ -92,20 +189,22 @@ impl<T: Copyable> Relay for Outbound<T> {
 
 /// `link/T` → `T` here: every sample that crossed.
 struct Inbound<T: Copyable> {
+    topic: &'static str,
     from: Subscriber<T>,
     to: Publisher<T>,
 }
 
 impl<T: Copyable> Relay for Inbound<T> {
-    fn poll(&mut self, _now: Instant) -> Result<u64, RelayError> {
-        let mut n = 0;
+    fn poll(
+        &mut self,
+        _now: Instant,
+        copied: &mut BTreeMap<&'static str, u64>,
+    ) -> Result<(), RelayError> {
         while let Some(s) = self.from.receive()? {
-            let mut loan = self.to.loan()?;
-            s.copy_into(&mut loan);
-            loan.send_relayed()?;
-            n += 1;
+            forward(&*s, &self.to)?;
+            *copied.entry(self.topic).or_default() += 1;
         }
-        Ok(n)
+        Ok(())
     }
 
     fn next_due(&self) -> Option<Instant> {
@@ -115,18 +214,15 @@ impl<T: Copyable> Relay for Inbound<T> {
 
 /// The relays of a tunnel's limited topics.
 pub struct Throttle {
-    /// (topic, relay, samples it copied).
-    relays: Vec<(String, Box<dyn Relay>, u64)>,
-    copied: u64,
+    relays: Vec<Box<dyn Relay>>,
+    /// Samples copied per topic (both directions).
+    copied: BTreeMap<&'static str, u64>,
 }
 
 impl std::fmt::Debug for Throttle {
     fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
         f.debug_struct("Throttle")
-            .field(
-                "relays",
-                &self.relays.iter().map(|r| &r.0).collect::<Vec<_>>(),
-            )
+            .field("relays", &self.relays.len())
             .field("copied", &self.copied)
             .finish()
     }
@@ -134,13 +230,14 @@ impl std::fmt::Debug for Throttle {
 
 fn relay<T: Copyable>(
     ctx: &PortContext,
-    topic: &str,
+    topic: &'static str,
     outbound: bool,
     max_hz: f64,
 ) -> Result<Box<dyn Relay>, LinkError> {
     let link = relay_topic(topic);
     Ok(if outbound {
         Box::new(Outbound {
+            topic,
             from: ctx.subscriber::<T>(topic)?,
             to: ctx.publisher::<T>(&link)?,
             period: Duration::from_secs_f64(1.0 / max_hz),
@@ -148,64 +245,78 @@ fn relay<T: Copyable>(
         })
     } else {
         Box::new(Inbound {
+            topic,
             from: ctx.subscriber::<T>(&link)?,
             to: ctx.publisher::<T>(topic)?,
         })
     })
 }
 
+fn frame_pairs(ctx: &PortContext, max_hz: f64) -> Result<Box<dyn Relay>, LinkError> {
+    use crate::topics::{DEPTH, DETECTIONS};
+    Ok(Box::new(FramePairs {
+        dets: ctx.subscriber(DETECTIONS)?,
+        frames: ctx.subscriber(DEPTH)?,
+        dets_to: ctx.publisher(&relay_topic(DETECTIONS))?,
+        frames_to: ctx.publisher(&relay_topic(DEPTH))?,
+        held: None,
+        period: Duration::from_secs_f64(1.0 / max_hz),
+        next: Instant::now(),
+    }))
+}
+
 impl Throttle {
-    /// A relay per `(topic, max_hz)` in `limited`, outbound where the topic is in `local`.
+    /// A relay per `(topic, max_hz)` in `limited`, outbound where the topic is in `local`;
+    /// `depth` and `detections` both limited and both local: one relay of frame pairs (the
+    /// configuration requires one rate for the two).
     pub fn new(
         ctx: &PortContext,
         limited: &[(&'static str, f64)],
         local: &[&'static str],
     ) -> Result<Self, LinkError> {
+        use crate::topics::{DEPTH, DETECTIONS, MAP};
+        let out = |t: &str| local.contains(&t);
+        let is_limited = |t: &str| limited.iter().any(|&(l, _)| l == t);
+        let paired = out(DEPTH) && out(DETECTIONS) && is_limited(DEPTH) && is_limited(DETECTIONS);
         let mut relays = Vec::new();
         for &(topic, hz) in limited {
-            let out = local.contains(&topic);
-            let r = match topic {
-                crate::topics::DEPTH => relay::<DepthFrame>(ctx, topic, out, hz)?,
-                crate::topics::MAP => relay::<ObjectMap>(ctx, topic, out, hz)?,
+            relays.push(match topic {
+                DEPTH if paired => frame_pairs(ctx, hz)?,
+                DETECTIONS if paired => continue,
+                DEPTH => relay::<DepthFrame>(ctx, topic, out(topic), hz)?,
+                DETECTIONS => relay::<Detections>(ctx, topic, out(topic), hz)?,
+                MAP => relay::<ObjectMap>(ctx, topic, out(topic), hz)?,
                 other => unreachable!("{other} is not a limitable topic"),
-            };
-            relays.push((topic.to_string(), r, 0));
+            });
         }
-        Ok(Self { relays, copied: 0 })
+        Ok(Self {
+            relays,
+            copied: BTreeMap::new(),
+        })
     }
 
-    /// Copy what is due on every relay.
+    /// Copy what is due on every relay; returns the samples copied.
     pub fn poll(&mut self, now: Instant) -> Result<u64, RelayError> {
-        let mut n = 0;
-        for (_, r, copied) in &mut self.relays {
-            let k = r.poll(now)?;
-            *copied += k;
-            n += k;
+        let before = self.copied();
+        for r in &mut self.relays {
+            r.poll(now, &mut self.copied)?;
         }
-        self.copied += n;
-        Ok(n)
+        Ok(self.copied() - before)
     }
 
     /// The earliest time an outbound relay may copy again.
     pub fn next_due(&self) -> Option<Instant> {
-        self.relays
-            .iter()
-            .filter_map(|(_, r, _)| r.next_due())
-            .min()
+        self.relays.iter().filter_map(|r| r.next_due()).min()
     }
 
     /// Samples copied so far (both directions).
     pub fn copied(&self) -> u64 {
-        self.copied
+        self.copied.values().sum()
     }
 
-    /// Samples the relay of `topic` copied so far (outbound: onto `link/<topic>`, i.e. the
+    /// Samples the relays copied of `topic` so far (outbound: onto `link/<topic>`, i.e. the
     /// samples that crossed; inbound: back onto `topic` here, i.e. the samples received).
     pub fn copied_of(&self, topic: &str) -> u64 {
-        self.relays
-            .iter()
-            .filter(|(t, _, _)| t == topic)
-            .map(|(_, _, n)| n)
-            .sum()
+        self.copied.get(topic).copied().unwrap_or(0)
     }
 }
