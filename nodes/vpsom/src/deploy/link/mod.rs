@@ -175,16 +175,53 @@ pub struct LinkReport {
     pub gaps: Vec<Duration>,
     /// Samples copied by the rate-limit relays.
     pub relayed: u64,
+    /// Per rate-limited topic and direction: what its relay moved and how long each copy took.
+    pub relays: Vec<RelayCount>,
+}
+
+/// What the rate-limit relay of one topic moved in one direction (see `throttle.rs`).
+#[derive(Debug, Clone, PartialEq)]
+pub struct RelayCount {
+    /// Topic.
+    pub topic: &'static str,
+    /// `true`: `link/<topic>` → `<topic>` here (received); else `<topic>` → `link/<topic>` (sent).
+    pub inbound: bool,
+    /// Samples copied.
+    pub samples: u64,
+    /// Bytes of `link/<topic>` payload these samples were (what crossed the link for them).
+    pub bytes: u64,
+    /// Wall time from the first copy to the last, s (0 with fewer than two).
+    pub span_s: f64,
+    /// Per copied sample, the time to receive it and copy it on, µs: mean.
+    pub mean_us: f64,
+    /// ... and 99th percentile.
+    pub p99_us: f64,
+}
+
+impl RelayCount {
+    /// Bytes per second from the first copy to the last, in MB/s (10⁶ bytes); 0 with fewer
+    /// than two copies.
+    pub fn mb_per_s(&self) -> f64 {
+        if self.span_s > 0.0 && self.samples > 1 {
+            // n samples span n - 1 intervals.
+            self.bytes as f64 * (self.samples - 1) as f64 / self.samples as f64 / self.span_s / 1e6
+        } else {
+            0.0
+        }
+    }
 }
 
 impl LinkReport {
     /// Table rows for the run's summary: the gaps, then per topic its account (see
-    /// [`TopicCount`]), then a warning row per topic that lost samples ([`Self::warnings`]).
+    /// [`TopicCount`]), then per rate-limit relay its bytes and copy time ([`RelayCount`]),
+    /// then a warning row per topic that lost samples ([`Self::warnings`]).
     ///
     /// Rows: `| link: <topic> out, <hz> Hz: published / crossed / dropped by local subscribers |
     /// P / C / D (<node> <n>, ...) |` for a topic published here, `| link: <topic> in, <hz> Hz:
     /// received / lost in the tunnel / dropped by local subscribers | R / L / D (...) |` for one
-    /// from the other host (`-` where a rate-limited topic has no such count).
+    /// from the other host (`-` where a rate-limited topic has no such count); per relay `| link:
+    /// bytes crossed, <topic> (sent|received) | N (X MB/s) |` and `| link: relay
+    /// receive-and-copy, <topic> (sent|received), µs per sample mean / p99 | M / P |`.
     pub fn rows(&self) -> String {
         let mut t = String::new();
         // `+ 0.0`: an empty sum of f64 is -0.0.
@@ -231,6 +268,19 @@ impl LinkReport {
                     c.topic, c.invalid
                 );
             }
+        }
+        for r in &self.relays {
+            let dir = if r.inbound { "received" } else { "sent" };
+            t += &format!(
+                "| link: bytes crossed, {} ({dir}) | {} ({:.2} MB/s) |\n",
+                r.topic,
+                r.bytes,
+                r.mb_per_s()
+            );
+            t += &format!(
+                "| link: relay receive-and-copy, {} ({dir}), µs per sample mean / p99 | {:.1} / {:.1} |\n",
+                r.topic, r.mean_us, r.p99_us
+            );
         }
         for w in self.warnings() {
             t += &format!("| link: WARNING | {w} |\n");
@@ -392,6 +442,15 @@ mod tests {
             ],
             gaps: Vec::new(),
             relayed: 0,
+            relays: vec![RelayCount {
+                topic: "depth",
+                inbound: false,
+                samples: 11,
+                bytes: 11_000_000,
+                span_s: 1.0,
+                mean_us: 12.34,
+                p99_us: 56.78,
+            }],
         };
         let rows = report.rows();
         assert!(
@@ -404,6 +463,14 @@ mod tests {
         );
         assert!(
             rows.contains("| link: sim/truth in, 100 Hz: received / lost in the tunnel / dropped by local subscribers | 7 / 3 / 2 (recorder 2) |"),
+            "{rows}"
+        );
+        assert!(
+            rows.contains("| link: bytes crossed, depth (sent) | 11000000 (10.00 MB/s) |"),
+            "{rows}"
+        );
+        assert!(
+            rows.contains("| link: relay receive-and-copy, depth (sent), µs per sample mean / p99 | 12.3 / 56.8 |"),
             "{rows}"
         );
         let w = report.warnings();

@@ -62,14 +62,71 @@ impl Copyable for ObjectMap {
     }
 }
 
+/// What one topic's relay moved, and how long each copy took (for the run summary).
+#[derive(Debug, Default)]
+pub struct Moved {
+    /// `link/<topic>` → `<topic>` (received from the other host).
+    inbound: bool,
+    samples: u64,
+    bytes: u64,
+    first: Option<Instant>,
+    last: Option<Instant>,
+    /// Per copied sample: receive and copy, ns.
+    took_ns: Vec<u64>,
+}
+
+impl Moved {
+    /// Count one copied sample of `bytes` on `link/<topic>` that took `took` to receive and copy.
+    fn record(&mut self, bytes: usize, took: Duration) {
+        let now = Instant::now();
+        self.samples += 1;
+        self.bytes += bytes as u64;
+        self.first.get_or_insert(now);
+        self.last = Some(now);
+        self.took_ns.push(took.as_nanos() as u64);
+    }
+
+    /// The account of `topic` for the report.
+    fn count(&self, topic: &'static str) -> super::RelayCount {
+        let mut ns = self.took_ns.clone();
+        ns.sort_unstable();
+        let mean = if ns.is_empty() {
+            0.0
+        } else {
+            ns.iter().sum::<u64>() as f64 / ns.len() as f64
+        };
+        let p99 = if ns.is_empty() {
+            0.0
+        } else {
+            ns[((ns.len() as f64 * 0.99).ceil() as usize).clamp(1, ns.len()) - 1] as f64
+        };
+        let span = match (self.first, self.last) {
+            (Some(a), Some(b)) => b.duration_since(a).as_secs_f64(),
+            _ => 0.0,
+        };
+        super::RelayCount {
+            topic,
+            inbound: self.inbound,
+            samples: self.samples,
+            bytes: self.bytes,
+            span_s: span,
+            mean_us: mean / 1e3,
+            p99_us: p99 / 1e3,
+        }
+    }
+}
+
+/// Per limited topic, what its relay moved.
+type MovedMap = BTreeMap<&'static str, Moved>;
+
+fn moved<'m>(m: &'m mut MovedMap, topic: &'static str) -> &'m mut Moved {
+    m.entry(topic).or_default()
+}
+
 /// One direction of one limited topic (or of a frame and its detections).
 trait Relay {
-    /// Copy what is due, counting each copied sample under its topic in `copied`.
-    fn poll(
-        &mut self,
-        now: Instant,
-        copied: &mut BTreeMap<&'static str, u64>,
-    ) -> Result<(), RelayError>;
+    /// Copy what is due, counting each copied sample under its topic in `moved`.
+    fn poll(&mut self, now: Instant, moved: &mut MovedMap) -> Result<(), RelayError>;
     /// When the next copy may be due (outbound), if it waits for time.
     fn next_due(&self) -> Option<Instant>;
 }
@@ -88,12 +145,12 @@ pub enum RelayError {
     Send(#[from] SendError),
 }
 
-/// Copy `s` into a loan of `to` and send it with its own header.
-fn forward<T: Copyable>(s: &T, to: &Publisher<T>) -> Result<(), RelayError> {
+/// Copy `s` into a loan of `to` and send it with its own header; returns the bytes sent.
+fn forward<T: Copyable>(s: &T, to: &Publisher<T>) -> Result<usize, RelayError> {
     let mut loan = to.loan()?;
     s.copy_into(&mut loan);
     loan.send_relayed()?;
-    Ok(())
+    Ok(std::mem::size_of::<T>())
 }
 
 /// Here → `link/T`: the newest sample of `T`, at most every `period`.
@@ -106,19 +163,16 @@ struct Outbound<T: Copyable> {
 }
 
 impl<T: Copyable> Relay for Outbound<T> {
-    fn poll(
-        &mut self,
-        now: Instant,
-        copied: &mut BTreeMap<&'static str, u64>,
-    ) -> Result<(), RelayError> {
+    fn poll(&mut self, now: Instant, moved: &mut MovedMap) -> Result<(), RelayError> {
         if now < self.next {
             return Ok(());
         }
+        let t0 = Instant::now();
         let Some(s) = self.from.latest()? else {
             return Ok(());
         };
-        forward(&*s, &self.to)?;
-        *copied.entry(self.topic).or_default() += 1;
+        let bytes = forward(&*s, &self.to)?;
+        self::moved(moved, self.topic).record(bytes, t0.elapsed());
         self.next = now + self.period;
         Ok(())
     }
@@ -142,14 +196,11 @@ struct FramePairs {
 }
 
 impl Relay for FramePairs {
-    fn poll(
-        &mut self,
-        now: Instant,
-        copied: &mut BTreeMap<&'static str, u64>,
-    ) -> Result<(), RelayError> {
+    fn poll(&mut self, now: Instant, moved: &mut MovedMap) -> Result<(), RelayError> {
         if now < self.next {
             return Ok(());
         }
+        let t0 = Instant::now();
         let Some(d) = self.dets.latest()? else {
             return Ok(());
         };
@@ -174,10 +225,14 @@ impl Relay for FramePairs {
             return Ok(());
         };
         // The frame first: the consumer waits for a frame's detections, not the reverse.
-        forward(&*f, &self.frames_to)?;
-        forward(&*d, &self.dets_to)?;
-        *copied.entry(crate::topics::DEPTH).or_default() += 1;
-        *copied.entry(crate::topics::DETECTIONS).or_default() += 1;
+        // Receiving is timed with the frame (finding it is most of it), the detections' copy
+        // on its own.
+        let frame_bytes = forward(&*f, &self.frames_to)?;
+        let frame_took = t0.elapsed();
+        let t1 = Instant::now();
+        let det_bytes = forward(&*d, &self.dets_to)?;
+        self::moved(moved, crate::topics::DETECTIONS).record(det_bytes, t1.elapsed());
+        self::moved(moved, crate::topics::DEPTH).record(frame_bytes, frame_took);
         self.next = now + self.period;
         Ok(())
     }
@@ -195,16 +250,15 @@ struct Inbound<T: Copyable> {
 }
 
 impl<T: Copyable> Relay for Inbound<T> {
-    fn poll(
-        &mut self,
-        _now: Instant,
-        copied: &mut BTreeMap<&'static str, u64>,
-    ) -> Result<(), RelayError> {
-        while let Some(s) = self.from.receive()? {
-            forward(&*s, &self.to)?;
-            *copied.entry(self.topic).or_default() += 1;
+    fn poll(&mut self, _now: Instant, moved: &mut MovedMap) -> Result<(), RelayError> {
+        loop {
+            let t0 = Instant::now();
+            let Some(s) = self.from.receive()? else {
+                return Ok(());
+            };
+            let bytes = forward(&*s, &self.to)?;
+            self::moved(moved, self.topic).record(bytes, t0.elapsed());
         }
-        Ok(())
     }
 
     fn next_due(&self) -> Option<Instant> {
@@ -215,15 +269,15 @@ impl<T: Copyable> Relay for Inbound<T> {
 /// The relays of a tunnel's limited topics.
 pub struct Throttle {
     relays: Vec<Box<dyn Relay>>,
-    /// Samples copied per topic (both directions).
-    copied: BTreeMap<&'static str, u64>,
+    /// What each limited topic's relay moved (one direction per topic on a host).
+    moved: MovedMap,
 }
 
 impl std::fmt::Debug for Throttle {
     fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
         f.debug_struct("Throttle")
             .field("relays", &self.relays.len())
-            .field("copied", &self.copied)
+            .field("copied", &self.copied())
             .finish()
     }
 }
@@ -279,7 +333,15 @@ impl Throttle {
         let is_limited = |t: &str| limited.iter().any(|&(l, _)| l == t);
         let paired = out(DEPTH) && out(DETECTIONS) && is_limited(DEPTH) && is_limited(DETECTIONS);
         let mut relays = Vec::new();
+        let mut moved = MovedMap::new();
         for &(topic, hz) in limited {
+            moved.insert(
+                topic,
+                Moved {
+                    inbound: !out(topic),
+                    ..Moved::default()
+                },
+            );
             relays.push(match topic {
                 DEPTH if paired => frame_pairs(ctx, hz)?,
                 DETECTIONS if paired => continue,
@@ -289,17 +351,14 @@ impl Throttle {
                 other => unreachable!("{other} is not a limitable topic"),
             });
         }
-        Ok(Self {
-            relays,
-            copied: BTreeMap::new(),
-        })
+        Ok(Self { relays, moved })
     }
 
     /// Copy what is due on every relay; returns the samples copied.
     pub fn poll(&mut self, now: Instant) -> Result<u64, RelayError> {
         let before = self.copied();
         for r in &mut self.relays {
-            r.poll(now, &mut self.copied)?;
+            r.poll(now, &mut self.moved)?;
         }
         Ok(self.copied() - before)
     }
@@ -311,12 +370,17 @@ impl Throttle {
 
     /// Samples copied so far (both directions).
     pub fn copied(&self) -> u64 {
-        self.copied.values().sum()
+        self.moved.values().map(|m| m.samples).sum()
     }
 
     /// Samples the relays copied of `topic` so far (outbound: onto `link/<topic>`, i.e. the
     /// samples that crossed; inbound: back onto `topic` here, i.e. the samples received).
     pub fn copied_of(&self, topic: &str) -> u64 {
-        self.copied.get(topic).copied().unwrap_or(0)
+        self.moved.get(topic).map_or(0, |m| m.samples)
+    }
+
+    /// Per limited topic: what its relay moved, for the report.
+    pub fn counts(&self) -> Vec<super::RelayCount> {
+        self.moved.iter().map(|(t, m)| m.count(t)).collect()
     }
 }
