@@ -742,7 +742,10 @@ impl Mapper {
 /// The axis-aligned bounds (min, max) of `pts`, `None` when empty.
 fn point_bounds(pts: &[Vec3]) -> Option<(Vec3, Vec3)> {
     let first = *pts.first()?;
-    Some(pts.iter().fold((first, first), |(lo, hi), p| (lo.min(*p), hi.max(*p))))
+    Some(
+        pts.iter()
+            .fold((first, first), |(lo, hi), p| (lo.min(*p), hi.max(*p))),
+    )
 }
 
 /// The intersection of two bounds as a fraction of the smaller one's volume (0 when apart; a

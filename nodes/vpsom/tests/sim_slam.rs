@@ -280,4 +280,3 @@ fn the_neck_yaw_in_the_camera_pose_carries_encoder_noise() {
     // The state reports the encoder reading too, not the true neck yaw.
     assert!(reported.iter().all(|&x| x != 0.0));
 }
-
