@@ -518,22 +518,29 @@ fn mapper_across_the_link_gets_each_frame_with_its_detections() {
     assert_eq!(crossed(&depth), crossed(&dets), "{so_a}");
     // What the relays moved (`--nocapture`): bytes and copy time per limited topic.
     for (host, out) in [("robot", &so_a), ("station", &so_b)] {
-        for l in out.lines().filter(|l| {
-            l.starts_with("| link: bytes crossed") || l.starts_with("| link: relay ")
-        }) {
+        for l in out
+            .lines()
+            .filter(|l| l.starts_with("| link: bytes crossed") || l.starts_with("| link: relay "))
+        {
             eprintln!("mapper across the link, {host}: {l}");
         }
     }
     let integrated = row(&so_b, "depth frames integrated by the mapper").unwrap();
-    let unmatched = row(&so_b, "frames skipped by the mapper (no matching detections)").unwrap();
+    let unmatched = row(
+        &so_b,
+        "frames skipped by the mapper (no matching detections)",
+    )
+    .unwrap();
     println!("station mapper: {integrated} frames integrated, {unmatched} without detections");
     assert!(integrated > 0.0, "{so_b}");
     // The pairs that were still crossing when the mapper stopped may miss their detections.
-    assert!(unmatched <= 2.0, "{unmatched} of {integrated} frames unmatched\n{so_b}");
+    assert!(
+        unmatched <= 2.0,
+        "{unmatched} of {integrated} frames unmatched\n{so_b}"
+    );
     nothing_in_the_default_domain(&ns);
     let _ = std::fs::remove_dir_all(&dir);
 }
-
 
 fn pump(mut from: TcpStream, mut to: TcpStream) {
     std::thread::spawn(move || {

@@ -23,8 +23,8 @@
 
 use super::error::{ConnectError, LoanError, PublisherError, ReceiveError, SendError};
 use super::error::{ServiceError, SubscriberError};
-use super::{PortContext, Services, Stamp, TopicSettings};
 use super::{Overflow, Sent};
+use super::{PortContext, Services, Stamp, TopicSettings};
 use iceoryx2::port::listener::Listener;
 use iceoryx2::port::notifier::Notifier;
 use iceoryx2::prelude::{AllocationStrategy, BackpressureStrategy, PortFactory as _, ipc};
@@ -369,9 +369,11 @@ impl SliceSubscriber {
         self.received.set(self.received.get().saturating_sub(1));
         self.invalid.set(self.invalid.get() + 1);
         let now = Instant::now();
-        if self.last_invalid_log.get().is_none_or(|t| {
-            now.duration_since(t) >= super::subscriber::INVALID_LOG_EVERY
-        }) {
+        if self
+            .last_invalid_log
+            .get()
+            .is_none_or(|t| now.duration_since(t) >= super::subscriber::INVALID_LOG_EVERY)
+        {
             self.last_invalid_log.set(Some(now));
             eprintln!(
                 "{}: dropped invalid sample seq {seq}: {why} ({} invalid so far)",

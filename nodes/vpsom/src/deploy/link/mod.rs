@@ -10,7 +10,8 @@
 //! | `endpoints.rs` | `--link` endpoints ([`parse_endpoint`]) and the zenoh configuration ([`zenoh_config`]) |
 //! | `tunnel.rs` | the tunnel thread: iceoryx2-link's `Link` over a zenoh carrier, the handshake, peer loss and return |
 //! | `watch.rs` | per topic: published and crossed (sending host), received and lost in the tunnel (receiving host), dropped by the local nodes' subscribers (their heartbeats), invalid samples ([`RUN_TOPICS`]) |
-//! | `throttle.rs` | `[link.max_hz]`: large topics cross through a relay topic `link/<topic>` at a limited rate |
+//! | `throttle.rs` | `[link.max_hz]`: large topics cross through a relay topic `link/<topic>` at a limited rate, as the bytes of their used part |
+//! | [`codec`] | the used part of a `DepthFrame`, `Detections` or `ObjectMap` as bytes, and back (built without the feature too) |
 //!
 //! Where it runs: a thread of the launcher process (`vpsom run`), not a node process. The
 //! launcher is the one process that is neither real-time nor a node, so zenoh's runtime threads
@@ -31,6 +32,7 @@
 
 #[cfg(feature = "link")]
 mod bridge;
+pub mod codec;
 #[cfg(feature = "link")]
 mod endpoints;
 #[cfg(feature = "link")]
@@ -196,6 +198,8 @@ pub struct RelayCount {
     pub mean_us: f64,
     /// ... and 99th percentile.
     pub p99_us: f64,
+    /// Samples the relay refused on receipt (failed validation; inbound, or did not decode).
+    pub invalid: u64,
 }
 
 impl RelayCount {
@@ -281,6 +285,12 @@ impl LinkReport {
                 "| link: relay receive-and-copy, {} ({dir}), µs per sample mean / p99 | {:.1} / {:.1} |\n",
                 r.topic, r.mean_us, r.p99_us
             );
+            if r.invalid > 0 {
+                t += &format!(
+                    "| link: relay {} invalid samples dropped | {} |\n",
+                    r.topic, r.invalid
+                );
+            }
         }
         for w in self.warnings() {
             t += &format!("| link: WARNING | {w} |\n");
@@ -450,6 +460,7 @@ mod tests {
                 span_s: 1.0,
                 mean_us: 12.34,
                 p99_us: 56.78,
+                invalid: 0,
             }],
         };
         let rows = report.rows();
