@@ -516,6 +516,15 @@ fn mapper_across_the_link_gets_each_frame_with_its_detections() {
     let crossed = |a: &Account| a.counts[1].expect("crossed is counted");
     assert!(crossed(&depth) > 0, "{so_a}");
     assert_eq!(crossed(&depth), crossed(&dets), "{so_a}");
+    // What the relays moved (`--nocapture`): bytes and copy time per limited topic.
+    for (host, out) in [("robot", &so_a), ("station", &so_b)] {
+        for l in out
+            .lines()
+            .filter(|l| l.starts_with("| link: bytes crossed") || l.starts_with("| link: relay "))
+        {
+            eprintln!("mapper across the link, {host}: {l}");
+        }
+    }
     let integrated = row(&so_b, "depth frames integrated by the mapper").unwrap();
     let unmatched = row(
         &so_b,

@@ -31,12 +31,14 @@
 //! | `config.rs` | [`PortsConfig`] (`[ports]`), [`TopicOverride`], [`TopicSettings`], [`Overflow`] |
 //! | `publisher.rs` | [`Publisher`], [`Loan`], [`Stamp`], [`Sent`] |
 //! | `subscriber.rs` | [`Subscriber`], [`Received`] |
+//! | `slice.rs` | [`SlicePublisher`], [`SliceLoan`], [`SliceSubscriber`], [`ReceivedSlice`]: a topic of variable-length byte samples (the link's relays) |
 //! | `error.rs` | one error type per operation, each keeping iceoryx2's error as its source |
 
 pub mod access;
 mod config;
 mod error;
 mod publisher;
+mod slice;
 mod subscriber;
 
 pub use config::{
@@ -48,10 +50,11 @@ pub use error::{
     ServiceError, SubscriberError, WaitError,
 };
 pub use publisher::{Loan, Publisher, Sent, Stamp};
+pub use slice::{ReceivedSlice, SliceLoan, SlicePublisher, SliceSubscriber};
 pub use subscriber::{Received, Subscriber};
 
 use iceoryx2::node::Node;
-use iceoryx2::prelude::{NodeBuilder, NodeName, ServiceName, ipc};
+use iceoryx2::prelude::{IceoryxSend, NodeBuilder, NodeName, ServiceName, ZeroCopySend, ipc};
 use iceoryx2::service::port_factory::{event, publish_subscribe};
 use shm_types::Message;
 use std::fmt;
@@ -192,17 +195,42 @@ impl PortContext {
         format!("{SERVICE_ROOT}/{}/{topic}", self.namespace)
     }
 
-    fn services<T: Message>(&self, topic: &str) -> Result<Services<T>, ServiceError> {
+    /// `topic`'s settings, full service name and iceoryx2 service name (checked).
+    fn naming(&self, topic: &str) -> Result<(TopicSettings, String, ServiceName), ServiceError> {
         check_topic(topic).map_err(|reason| ServiceError::Topic {
             topic: topic.into(),
             reason,
         })?;
-        let s = self.config.topic(topic);
         let full = self.service_name(topic);
         let name = ServiceName::new(&full).map_err(|source| ServiceError::ServiceName {
             service: full.clone(),
             source,
         })?;
+        Ok((self.config.topic(topic), full, name))
+    }
+
+    /// The event service paired with the publish-subscribe service `name`.
+    fn event_service(
+        &self,
+        name: &ServiceName,
+        full: &str,
+        s: &TopicSettings,
+    ) -> Result<event::PortFactory<ipc::Service>, ServiceError> {
+        self.node
+            .service_builder(name)
+            .event()
+            .max_notifiers(s.max_publishers)
+            .max_listeners(s.max_subscribers)
+            .max_nodes(s.max_nodes)
+            .open_or_create()
+            .map_err(|source| ServiceError::Event {
+                service: full.into(),
+                source,
+            })
+    }
+
+    fn services<T: Message>(&self, topic: &str) -> Result<Services<T>, ServiceError> {
+        let (s, full, name) = self.naming(topic)?;
         let pubsub = self
             .node
             .service_builder(&name)
@@ -219,18 +247,7 @@ impl PortContext {
                 service: full.clone(),
                 source,
             })?;
-        let event = self
-            .node
-            .service_builder(&name)
-            .event()
-            .max_notifiers(s.max_publishers)
-            .max_listeners(s.max_subscribers)
-            .max_nodes(s.max_nodes)
-            .open_or_create()
-            .map_err(|source| ServiceError::Event {
-                service: full.clone(),
-                source,
-            })?;
+        let event = self.event_service(&name, &full, &s)?;
         Ok(Services {
             pubsub,
             event,
@@ -250,9 +267,10 @@ impl PortContext {
     }
 }
 
-/// The two services of one topic.
-struct Services<T: Message> {
-    pubsub: publish_subscribe::PortFactory<ipc::Service, T, ()>,
+/// The two services of one topic: a typed message `T`, or (`Services<[u8], Header>`, see
+/// [`slice`]) the bytes of one with the header beside them.
+struct Services<T: ?Sized + fmt::Debug + IceoryxSend, H: fmt::Debug + ZeroCopySend = ()> {
+    pubsub: publish_subscribe::PortFactory<ipc::Service, T, H>,
     event: event::PortFactory<ipc::Service>,
     settings: TopicSettings,
     name: String,

@@ -10,7 +10,8 @@
 //! | `endpoints.rs` | `--link` endpoints ([`parse_endpoint`]) and the zenoh configuration ([`zenoh_config`]) |
 //! | `tunnel.rs` | the tunnel thread: iceoryx2-link's `Link` over a zenoh carrier, the handshake, peer loss and return |
 //! | `watch.rs` | per topic: published and crossed (sending host), received and lost in the tunnel (receiving host), dropped by the local nodes' subscribers (their heartbeats), invalid samples ([`RUN_TOPICS`]) |
-//! | `throttle.rs` | `[link.max_hz]`: large topics cross through a relay topic `link/<topic>` at a limited rate |
+//! | `throttle.rs` | `[link.max_hz]`: large topics cross through a relay topic `link/<topic>` at a limited rate, as the bytes of their used part |
+//! | [`codec`] | the used part of a `DepthFrame`, `Detections` or `ObjectMap` as bytes, and back (built without the feature too) |
 //!
 //! Where it runs: a thread of the launcher process (`vpsom run`), not a node process. The
 //! launcher is the one process that is neither real-time nor a node, so zenoh's runtime threads
@@ -31,6 +32,7 @@
 
 #[cfg(feature = "link")]
 mod bridge;
+pub mod codec;
 #[cfg(feature = "link")]
 mod endpoints;
 #[cfg(feature = "link")]
@@ -175,16 +177,55 @@ pub struct LinkReport {
     pub gaps: Vec<Duration>,
     /// Samples copied by the rate-limit relays.
     pub relayed: u64,
+    /// Per rate-limited topic and direction: what its relay moved and how long each copy took.
+    pub relays: Vec<RelayCount>,
+}
+
+/// What the rate-limit relay of one topic moved in one direction (see `throttle.rs`).
+#[derive(Debug, Clone, PartialEq)]
+pub struct RelayCount {
+    /// Topic.
+    pub topic: &'static str,
+    /// `true`: `link/<topic>` → `<topic>` here (received); else `<topic>` → `link/<topic>` (sent).
+    pub inbound: bool,
+    /// Samples copied.
+    pub samples: u64,
+    /// Bytes of `link/<topic>` payload these samples were (what crossed the link for them).
+    pub bytes: u64,
+    /// Wall time from the first copy to the last, s (0 with fewer than two).
+    pub span_s: f64,
+    /// Per copied sample, the time to receive it and copy it on, µs: mean.
+    pub mean_us: f64,
+    /// ... and 99th percentile.
+    pub p99_us: f64,
+    /// Samples the relay refused on receipt (failed validation; inbound, or did not decode).
+    pub invalid: u64,
+}
+
+impl RelayCount {
+    /// Bytes per second from the first copy to the last, in MB/s (10⁶ bytes); 0 with fewer
+    /// than two copies.
+    pub fn mb_per_s(&self) -> f64 {
+        if self.span_s > 0.0 && self.samples > 1 {
+            // n samples span n - 1 intervals.
+            self.bytes as f64 * (self.samples - 1) as f64 / self.samples as f64 / self.span_s / 1e6
+        } else {
+            0.0
+        }
+    }
 }
 
 impl LinkReport {
     /// Table rows for the run's summary: the gaps, then per topic its account (see
-    /// [`TopicCount`]), then a warning row per topic that lost samples ([`Self::warnings`]).
+    /// [`TopicCount`]), then per rate-limit relay its bytes and copy time ([`RelayCount`]),
+    /// then a warning row per topic that lost samples ([`Self::warnings`]).
     ///
     /// Rows: `| link: <topic> out, <hz> Hz: published / crossed / dropped by local subscribers |
     /// P / C / D (<node> <n>, ...) |` for a topic published here, `| link: <topic> in, <hz> Hz:
     /// received / lost in the tunnel / dropped by local subscribers | R / L / D (...) |` for one
-    /// from the other host (`-` where a rate-limited topic has no such count).
+    /// from the other host (`-` where a rate-limited topic has no such count); per relay `| link:
+    /// bytes crossed, <topic> (sent|received) | N (X MB/s) |` and `| link: relay
+    /// receive-and-copy, <topic> (sent|received), µs per sample mean / p99 | M / P |`.
     pub fn rows(&self) -> String {
         let mut t = String::new();
         // `+ 0.0`: an empty sum of f64 is -0.0.
@@ -229,6 +270,25 @@ impl LinkReport {
                 t += &format!(
                     "| link: {} invalid samples dropped | {} |\n",
                     c.topic, c.invalid
+                );
+            }
+        }
+        for r in &self.relays {
+            let dir = if r.inbound { "received" } else { "sent" };
+            t += &format!(
+                "| link: bytes crossed, {} ({dir}) | {} ({:.2} MB/s) |\n",
+                r.topic,
+                r.bytes,
+                r.mb_per_s()
+            );
+            t += &format!(
+                "| link: relay receive-and-copy, {} ({dir}), µs per sample mean / p99 | {:.1} / {:.1} |\n",
+                r.topic, r.mean_us, r.p99_us
+            );
+            if r.invalid > 0 {
+                t += &format!(
+                    "| link: relay {} invalid samples dropped | {} |\n",
+                    r.topic, r.invalid
                 );
             }
         }
@@ -392,6 +452,16 @@ mod tests {
             ],
             gaps: Vec::new(),
             relayed: 0,
+            relays: vec![RelayCount {
+                topic: "depth",
+                inbound: false,
+                samples: 11,
+                bytes: 11_000_000,
+                span_s: 1.0,
+                mean_us: 12.34,
+                p99_us: 56.78,
+                invalid: 0,
+            }],
         };
         let rows = report.rows();
         assert!(
@@ -404,6 +474,14 @@ mod tests {
         );
         assert!(
             rows.contains("| link: sim/truth in, 100 Hz: received / lost in the tunnel / dropped by local subscribers | 7 / 3 / 2 (recorder 2) |"),
+            "{rows}"
+        );
+        assert!(
+            rows.contains("| link: bytes crossed, depth (sent) | 11000000 (10.00 MB/s) |"),
+            "{rows}"
+        );
+        assert!(
+            rows.contains("| link: relay receive-and-copy, depth (sent), µs per sample mean / p99 | 12.3 / 56.8 |"),
             "{rows}"
         );
         let w = report.warnings();

@@ -2,18 +2,35 @@
 //! itself; the host that publishes it copies its newest sample at most `max_hz` times a second
 //! onto `link/T`, which is bridged, and the other host copies what arrives on `link/T` back onto
 //! `T`. Both copies keep the publisher's header (sequence number, stamps), so a consumer sees the
-//! frames that crossed as the producer numbered them. Either copy validates the sample first
-//! (it is received through a [`Subscriber`]). A slow link then carries at most
-//! `max_hz × size` bytes a second of that topic, and the robot's publisher never waits for it.
+//! frames that crossed as the producer numbered them. The sample is validated before either
+//! copy (received through a typed [`Subscriber`] here; decoded and validated there). A slow
+//! link then carries at most `max_hz × used bytes` a second of that topic, and the robot's
+//! publisher never waits for it.
+//!
+//! `link/T` is a byte-slice service (`runtime::ports::SlicePublisher`, iceoryx2 `[u8]` payloads
+//! with the [`Header`](shm_types::Header) as user header), not a `T`: each sample is the
+//! [`Codec`] encoding of the used part of `T` (a 320×240 frame's pixels, not 640×480; the
+//! detections' items and, only in mask mode, their label image; the map's objects), as long as
+//! that and no longer. The slice publisher's maximum is `T`'s full encoding, so any camera size
+//! fits. The tunnel carries a slice sample at its length (iceoryx2-link 0.10 relays a dynamic
+//! payload's bytes and loans the same length on the other side). A slice that does not decode,
+//! or decodes to an invalid `T`, is refused and counted (`| link: relay <topic> invalid samples
+//! dropped |`), never published.
 //!
 //! Detections belong to a frame (`frame_seq`): a consumer across the link (the mapper) pairs
 //! them. When both `depth` and `detections` are limited and published on this host, one relay
 //! carries them as pairs: at each due time the newest detections and the frame they belong to
 //! (a frame is published before its detections, so it is already there).
+//!
+//! Each relay counts the bytes it sent or received per topic and times each sample's receive
+//! and copy (encode or decode) for the run summary ([`super::RelayCount`]).
 
 use super::LinkError;
-use runtime::ports::{PortContext, Publisher, ReceiveError, SendError, Subscriber};
-use shm_types::{DepthFrame, Detections, Message, ObjectMap, mask_mode};
+use super::codec::{Codec, DecodeError};
+use runtime::ports::{
+    PortContext, Publisher, ReceiveError, SendError, SlicePublisher, SliceSubscriber, Subscriber,
+};
+use shm_types::{DepthFrame, Detections, ObjectMap};
 use std::collections::BTreeMap;
 use std::time::{Duration, Instant};
 
@@ -22,56 +39,77 @@ pub fn relay_topic(topic: &str) -> String {
     format!("link/{topic}")
 }
 
-/// A message that can be copied into a loaned sample of its type, header included.
-pub trait Copyable: Message {
-    /// Copy `self` (every field a consumer reads) into `dst`.
-    fn copy_into(&self, dst: &mut Self);
+/// What one topic's relay moved, and how long each copy took (for the run summary).
+#[derive(Debug, Default)]
+pub struct Moved {
+    /// `link/<topic>` → `<topic>` (received from the other host).
+    inbound: bool,
+    samples: u64,
+    bytes: u64,
+    first: Option<Instant>,
+    last: Option<Instant>,
+    /// Per copied sample: receive and copy, ns.
+    took_ns: Vec<u64>,
 }
 
-impl Copyable for DepthFrame {
-    fn copy_into(&self, dst: &mut Self) {
-        dst.header = self.header;
-        dst.width = self.width;
-        dst.height = self.height;
-        dst.intrinsics = self.intrinsics;
-        dst.camera_pose = self.camera_pose;
-        dst.reserved = self.reserved;
-        dst.pixels_mut().copy_from_slice(self.pixels());
+impl Moved {
+    /// Count one copied sample of `bytes` on `link/<topic>` that took `took` to receive and copy.
+    fn record(&mut self, bytes: usize, took: Duration) {
+        let now = Instant::now();
+        self.samples += 1;
+        self.bytes += bytes as u64;
+        self.first.get_or_insert(now);
+        self.last = Some(now);
+        self.took_ns.push(took.as_nanos() as u64);
     }
-}
 
-impl Copyable for Detections {
-    fn copy_into(&self, dst: &mut Self) {
-        dst.header = self.header;
-        dst.frame_seq = self.frame_seq;
-        dst.width = self.width;
-        dst.height = self.height;
-        dst.count = self.count;
-        dst.masks = self.masks;
-        let n = self.detections().len();
-        dst.items[..n].copy_from_slice(self.detections());
-        if self.masks == mask_mode::MASKS {
-            dst.label_pixels_mut().copy_from_slice(self.label_pixels());
+    /// The account of `topic` for the report.
+    fn count(&self, topic: &'static str) -> super::RelayCount {
+        let mut ns = self.took_ns.clone();
+        ns.sort_unstable();
+        let mean = if ns.is_empty() {
+            0.0
+        } else {
+            ns.iter().sum::<u64>() as f64 / ns.len() as f64
+        };
+        let p99 = if ns.is_empty() {
+            0.0
+        } else {
+            ns[((ns.len() as f64 * 0.99).ceil() as usize).clamp(1, ns.len()) - 1] as f64
+        };
+        let span = match (self.first, self.last) {
+            (Some(a), Some(b)) => b.duration_since(a).as_secs_f64(),
+            _ => 0.0,
+        };
+        super::RelayCount {
+            topic,
+            inbound: self.inbound,
+            samples: self.samples,
+            bytes: self.bytes,
+            span_s: span,
+            mean_us: mean / 1e3,
+            p99_us: p99 / 1e3,
+            // Filled in from the relay's subscribers (`Throttle::counts`).
+            invalid: 0,
         }
     }
 }
 
-impl Copyable for ObjectMap {
-    fn copy_into(&self, dst: &mut Self) {
-        dst.copy_from(self);
-    }
+/// Per limited topic, what its relay moved.
+type MovedMap = BTreeMap<&'static str, Moved>;
+
+fn moved<'m>(m: &'m mut MovedMap, topic: &'static str) -> &'m mut Moved {
+    m.entry(topic).or_default()
 }
 
 /// One direction of one limited topic (or of a frame and its detections).
 trait Relay {
-    /// Copy what is due, counting each copied sample under its topic in `copied`.
-    fn poll(
-        &mut self,
-        now: Instant,
-        copied: &mut BTreeMap<&'static str, u64>,
-    ) -> Result<(), RelayError>;
+    /// Copy what is due, counting each copied sample under its topic in `moved`.
+    fn poll(&mut self, now: Instant, moved: &mut MovedMap) -> Result<(), RelayError>;
     /// When the next copy may be due (outbound), if it waits for time.
     fn next_due(&self) -> Option<Instant>;
+    /// Per topic it receives: samples refused on receipt so far.
+    fn invalid(&self) -> Vec<(&'static str, u64)>;
 }
 
 /// Why a relay failed.
@@ -88,43 +126,56 @@ pub enum RelayError {
     Send(#[from] SendError),
 }
 
-/// Copy `s` into a loan of `to` and send it with its own header.
-fn forward<T: Copyable>(s: &T, to: &Publisher<T>) -> Result<(), RelayError> {
-    let mut loan = to.loan()?;
-    s.copy_into(&mut loan);
+/// Why a sample from `link/<topic>` was refused.
+#[derive(Debug, thiserror::Error)]
+enum Refused {
+    #[error(transparent)]
+    Decode(#[from] DecodeError),
+    #[error(transparent)]
+    Invalid(#[from] shm_types::ValidationError),
+}
+
+/// Encode the used part of `s` into a loan of `to` as long as that ([`Codec`]) and send it
+/// with `s`'s own header; returns the bytes sent.
+fn forward<T: Codec>(s: &T, to: &SlicePublisher) -> Result<usize, RelayError> {
+    let len = s.encoded_len();
+    let mut loan = to.loan(len)?;
+    s.encode(&mut loan);
+    *loan.header_mut() = *s.header();
     loan.send_relayed()?;
-    Ok(())
+    Ok(len)
 }
 
 /// Here → `link/T`: the newest sample of `T`, at most every `period`.
-struct Outbound<T: Copyable> {
+struct Outbound<T: Codec> {
     topic: &'static str,
     from: Subscriber<T>,
-    to: Publisher<T>,
+    to: SlicePublisher,
     period: Duration,
     next: Instant,
 }
 
-impl<T: Copyable> Relay for Outbound<T> {
-    fn poll(
-        &mut self,
-        now: Instant,
-        copied: &mut BTreeMap<&'static str, u64>,
-    ) -> Result<(), RelayError> {
+impl<T: Codec> Relay for Outbound<T> {
+    fn poll(&mut self, now: Instant, moved: &mut MovedMap) -> Result<(), RelayError> {
         if now < self.next {
             return Ok(());
         }
+        let t0 = Instant::now();
         let Some(s) = self.from.latest()? else {
             return Ok(());
         };
-        forward(&*s, &self.to)?;
-        *copied.entry(self.topic).or_default() += 1;
+        let bytes = forward(&*s, &self.to)?;
+        self::moved(moved, self.topic).record(bytes, t0.elapsed());
         self.next = now + self.period;
         Ok(())
     }
 
     fn next_due(&self) -> Option<Instant> {
         Some(self.next)
+    }
+
+    fn invalid(&self) -> Vec<(&'static str, u64)> {
+        vec![(self.topic, self.from.invalid())]
     }
 }
 
@@ -133,8 +184,8 @@ impl<T: Copyable> Relay for Outbound<T> {
 struct FramePairs {
     dets: Subscriber<Detections>,
     frames: Subscriber<DepthFrame>,
-    dets_to: Publisher<Detections>,
-    frames_to: Publisher<DepthFrame>,
+    dets_to: SlicePublisher,
+    frames_to: SlicePublisher,
     /// A frame newer than the detections last looked at, kept for its own detections.
     held: Option<runtime::ports::Received<DepthFrame>>,
     period: Duration,
@@ -142,14 +193,11 @@ struct FramePairs {
 }
 
 impl Relay for FramePairs {
-    fn poll(
-        &mut self,
-        now: Instant,
-        copied: &mut BTreeMap<&'static str, u64>,
-    ) -> Result<(), RelayError> {
+    fn poll(&mut self, now: Instant, moved: &mut MovedMap) -> Result<(), RelayError> {
         if now < self.next {
             return Ok(());
         }
+        let t0 = Instant::now();
         let Some(d) = self.dets.latest()? else {
             return Ok(());
         };
@@ -174,10 +222,14 @@ impl Relay for FramePairs {
             return Ok(());
         };
         // The frame first: the consumer waits for a frame's detections, not the reverse.
-        forward(&*f, &self.frames_to)?;
-        forward(&*d, &self.dets_to)?;
-        *copied.entry(crate::topics::DEPTH).or_default() += 1;
-        *copied.entry(crate::topics::DETECTIONS).or_default() += 1;
+        // Receiving is timed with the frame (finding it is most of it), the detections' copy
+        // on its own.
+        let frame_bytes = forward(&*f, &self.frames_to)?;
+        let frame_took = t0.elapsed();
+        let t1 = Instant::now();
+        let det_bytes = forward(&*d, &self.dets_to)?;
+        self::moved(moved, crate::topics::DETECTIONS).record(det_bytes, t1.elapsed());
+        self::moved(moved, crate::topics::DEPTH).record(frame_bytes, frame_took);
         self.next = now + self.period;
         Ok(())
     }
@@ -185,50 +237,74 @@ impl Relay for FramePairs {
     fn next_due(&self) -> Option<Instant> {
         Some(self.next)
     }
+
+    fn invalid(&self) -> Vec<(&'static str, u64)> {
+        use crate::topics::{DEPTH, DETECTIONS};
+        vec![
+            (DEPTH, self.frames.invalid()),
+            (DETECTIONS, self.dets.invalid()),
+        ]
+    }
 }
 
-/// `link/T` → `T` here: every sample that crossed.
-struct Inbound<T: Copyable> {
+/// `link/T` → `T` here: every sample that crossed, decoded ([`Codec::decode`]) into a loan
+/// of `T` and validated; one that fails either is refused (counted, logged, not published).
+struct Inbound<T: Codec> {
     topic: &'static str,
-    from: Subscriber<T>,
+    from: SliceSubscriber,
     to: Publisher<T>,
 }
 
-impl<T: Copyable> Relay for Inbound<T> {
-    fn poll(
-        &mut self,
-        _now: Instant,
-        copied: &mut BTreeMap<&'static str, u64>,
-    ) -> Result<(), RelayError> {
-        while let Some(s) = self.from.receive()? {
-            forward(&*s, &self.to)?;
-            *copied.entry(self.topic).or_default() += 1;
+impl<T: Codec> Relay for Inbound<T> {
+    fn poll(&mut self, _now: Instant, moved: &mut MovedMap) -> Result<(), RelayError> {
+        loop {
+            let t0 = Instant::now();
+            let Some(s) = self.from.receive()? else {
+                return Ok(());
+            };
+            let mut loan = self.to.loan()?;
+            let decoded = T::decode(s.header(), &s, &mut loan)
+                .map_err(Refused::from)
+                .and_then(|()| loan.validate().map_err(Refused::from));
+            match decoded {
+                Ok(()) => {
+                    loan.send_relayed()?;
+                    self::moved(moved, self.topic).record(s.len(), t0.elapsed());
+                }
+                Err(e) => {
+                    drop(loan);
+                    self.from.reject(s, &e);
+                }
+            }
         }
-        Ok(())
     }
 
     fn next_due(&self) -> Option<Instant> {
         None
+    }
+
+    fn invalid(&self) -> Vec<(&'static str, u64)> {
+        vec![(self.topic, self.from.invalid())]
     }
 }
 
 /// The relays of a tunnel's limited topics.
 pub struct Throttle {
     relays: Vec<Box<dyn Relay>>,
-    /// Samples copied per topic (both directions).
-    copied: BTreeMap<&'static str, u64>,
+    /// What each limited topic's relay moved (one direction per topic on a host).
+    moved: MovedMap,
 }
 
 impl std::fmt::Debug for Throttle {
     fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
         f.debug_struct("Throttle")
             .field("relays", &self.relays.len())
-            .field("copied", &self.copied)
+            .field("copied", &self.copied())
             .finish()
     }
 }
 
-fn relay<T: Copyable>(
+fn relay<T: Codec>(
     ctx: &PortContext,
     topic: &'static str,
     outbound: bool,
@@ -239,14 +315,14 @@ fn relay<T: Copyable>(
         Box::new(Outbound {
             topic,
             from: ctx.subscriber::<T>(topic)?,
-            to: ctx.publisher::<T>(&link)?,
+            to: ctx.slice_publisher(&link, T::MAX_ENCODED)?,
             period: Duration::from_secs_f64(1.0 / max_hz),
             next: Instant::now(),
         })
     } else {
         Box::new(Inbound {
             topic,
-            from: ctx.subscriber::<T>(&link)?,
+            from: ctx.slice_subscriber(&link)?,
             to: ctx.publisher::<T>(topic)?,
         })
     })
@@ -257,8 +333,8 @@ fn frame_pairs(ctx: &PortContext, max_hz: f64) -> Result<Box<dyn Relay>, LinkErr
     Ok(Box::new(FramePairs {
         dets: ctx.subscriber(DETECTIONS)?,
         frames: ctx.subscriber(DEPTH)?,
-        dets_to: ctx.publisher(&relay_topic(DETECTIONS))?,
-        frames_to: ctx.publisher(&relay_topic(DEPTH))?,
+        dets_to: ctx.slice_publisher(&relay_topic(DETECTIONS), Detections::MAX_ENCODED)?,
+        frames_to: ctx.slice_publisher(&relay_topic(DEPTH), DepthFrame::MAX_ENCODED)?,
         held: None,
         period: Duration::from_secs_f64(1.0 / max_hz),
         next: Instant::now(),
@@ -279,7 +355,15 @@ impl Throttle {
         let is_limited = |t: &str| limited.iter().any(|&(l, _)| l == t);
         let paired = out(DEPTH) && out(DETECTIONS) && is_limited(DEPTH) && is_limited(DETECTIONS);
         let mut relays = Vec::new();
+        let mut moved = MovedMap::new();
         for &(topic, hz) in limited {
+            moved.insert(
+                topic,
+                Moved {
+                    inbound: !out(topic),
+                    ..Moved::default()
+                },
+            );
             relays.push(match topic {
                 DEPTH if paired => frame_pairs(ctx, hz)?,
                 DETECTIONS if paired => continue,
@@ -289,17 +373,14 @@ impl Throttle {
                 other => unreachable!("{other} is not a limitable topic"),
             });
         }
-        Ok(Self {
-            relays,
-            copied: BTreeMap::new(),
-        })
+        Ok(Self { relays, moved })
     }
 
     /// Copy what is due on every relay; returns the samples copied.
     pub fn poll(&mut self, now: Instant) -> Result<u64, RelayError> {
         let before = self.copied();
         for r in &mut self.relays {
-            r.poll(now, &mut self.copied)?;
+            r.poll(now, &mut self.moved)?;
         }
         Ok(self.copied() - before)
     }
@@ -311,12 +392,30 @@ impl Throttle {
 
     /// Samples copied so far (both directions).
     pub fn copied(&self) -> u64 {
-        self.copied.values().sum()
+        self.moved.values().map(|m| m.samples).sum()
     }
 
     /// Samples the relays copied of `topic` so far (outbound: onto `link/<topic>`, i.e. the
     /// samples that crossed; inbound: back onto `topic` here, i.e. the samples received).
     pub fn copied_of(&self, topic: &str) -> u64 {
-        self.copied.get(topic).copied().unwrap_or(0)
+        self.moved.get(topic).map_or(0, |m| m.samples)
+    }
+
+    /// Per limited topic: what its relay moved, for the report.
+    pub fn counts(&self) -> Vec<super::RelayCount> {
+        let mut invalid: BTreeMap<&str, u64> = BTreeMap::new();
+        for r in &self.relays {
+            for (t, n) in r.invalid() {
+                *invalid.entry(t).or_default() += n;
+            }
+        }
+        self.moved
+            .iter()
+            .map(|(t, m)| {
+                let mut c = m.count(t);
+                c.invalid = invalid.get(t).copied().unwrap_or(0);
+                c
+            })
+            .collect()
     }
 }

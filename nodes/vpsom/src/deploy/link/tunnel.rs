@@ -276,6 +276,7 @@ pub(super) fn run(spec: Spec, shared: Arc<Shared>) -> Result<LinkReport, LinkErr
         topics: watch.counts(|t| throttle.copied_of(t)),
         gaps,
         relayed: throttle.copied(),
+        relays: throttle.counts(),
     };
     report.warn();
     Ok(report)
