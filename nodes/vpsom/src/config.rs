@@ -210,6 +210,17 @@ impl Default for LinkConfig {
 }
 
 impl LinkConfig {
+    /// The rate limit of `topic` across the link, Hz (`None`: every sample, at full size).
+    /// Detections without a key of their own follow depth's limit: a frame and its detections
+    /// cross as one pair (`detections = 0` sends every detections sample instead).
+    pub fn limit(&self, topic: &str) -> Option<f64> {
+        let key = match (topic, self.max_hz.contains_key(topic)) {
+            ("detections", false) => "depth",
+            _ => topic,
+        };
+        self.max_hz.get(key).copied().filter(|&hz| hz > 0.0)
+    }
+
     fn validate(&self, c: &Checker) -> Result<(), ConfigError> {
         let c = &c.at("link");
         settings::ranges!(c, self, {
@@ -231,8 +242,8 @@ impl LinkConfig {
             c.in_range(&max_hz.key(topic), hz, 0.0, 1000.0)?;
         }
         // Detections cross with their frame when both are limited (the mapper pairs them).
-        let limit = |t: &str| self.max_hz.get(t).copied().filter(|&hz| hz > 0.0);
-        if let (Some(depth), Some(dets)) = (limit("depth"), limit("detections")) {
+        let set = |t: &str| self.max_hz.get(t).copied().filter(|&hz| hz > 0.0);
+        if let (Some(depth), Some(dets)) = (set("depth"), set("detections")) {
             c.require(
                 dets == depth,
                 &max_hz.key("detections"),

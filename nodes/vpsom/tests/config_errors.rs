@@ -94,8 +94,18 @@ fn link_rate_limits_name_the_topic_and_pair_detections_with_depth() {
     assert!(e.to_string().contains("state"), "{e}");
     // Detections alone, or at depth's rate: accepted.
     let c = Config::parse(f, "[link.max_hz]\ndepth = 0.0\ndetections = 5.0\n").unwrap();
-    assert_eq!(c.link.max_hz["detections"], 5.0);
+    assert_eq!(c.link.limit("detections"), Some(5.0));
+    assert_eq!(c.link.limit("depth"), None);
     Config::parse(f, "[link.max_hz]\ndepth = 5.0\ndetections = 5.0\n").unwrap();
+    // Without a key of their own, detections follow depth (the default: 10 Hz pairs);
+    // `detections = 0` sends every one at full size.
+    let c = Config::parse(f, "[link.max_hz]\ndepth = 4.0\n").unwrap();
+    assert_eq!(c.link.limit("detections"), Some(4.0));
+    let c = Config::parse(f, "[link.max_hz]\ndetections = 0.0\n").unwrap();
+    assert_eq!(
+        (c.link.limit("depth"), c.link.limit("detections")),
+        (Some(10.0), None)
+    );
     // Both limited at different rates: refused, naming detections and depth's value.
     let e = Config::parse(f, "[link.max_hz]\ndepth = 10.0\ndetections = 5.0\n").unwrap_err();
     assert_eq!(e.key(), "link.max_hz.detections", "{e}");

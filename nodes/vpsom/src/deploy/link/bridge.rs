@@ -133,8 +133,7 @@ impl Link {
             .collect();
         let limited: Vec<(&'static str, f64)> = RUN_TOPICS
             .into_iter()
-            .filter_map(|t| cfg.link.max_hz.get(t).map(|&hz| (t, hz)))
-            .filter(|&(_, hz)| hz > 0.0)
+            .filter_map(|t| cfg.link.limit(t).map(|hz| (t, hz)))
             .collect();
         let service = |t: &str| format!("{}/{namespace}/{t}", runtime::ports::SERVICE_ROOT);
         let allow = RUN_TOPICS

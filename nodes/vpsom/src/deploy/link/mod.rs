@@ -87,10 +87,7 @@ pub fn wall_hz(topic: &str, cfg: &crate::config::Config, time_scale: f64) -> Opt
         _ => return None,
     };
     let hz = sim_hz * time_scale;
-    Some(match cfg.link.max_hz.get(topic) {
-        Some(&limit) if limit > 0.0 => hz.min(limit),
-        _ => hz,
-    })
+    Some(cfg.link.limit(topic).map_or(hz, |limit| hz.min(limit)))
 }
 
 /// The depth that holds [`STALL_S`] of `topic` at `wall_hz`, at least `configured`; a large
