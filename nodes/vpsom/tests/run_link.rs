@@ -457,9 +457,12 @@ fn mapper_across_the_link_gets_each_frame_with_its_detections() {
     let pid = std::process::id();
     let ns = format!("lk{pid}m");
     let port = free_port();
-    // Depth and detections limited together: they cross as pairs (a frame and its detections).
+    // Depth and detections limited together: they cross as pairs (a frame and its detections);
+    // the station mapper's maps come back limited too, through the ObjectMap relay.
     const PAIR_HZ: f64 = 5.0;
-    let limit = format!("[link.max_hz]\ndepth = {PAIR_HZ}\ndetections = {PAIR_HZ}\n");
+    const MAP_HZ: f64 = 4.0;
+    let limit =
+        format!("[link.max_hz]\ndepth = {PAIR_HZ}\ndetections = {PAIR_HZ}\nmap = {MAP_HZ}\n");
     let a = host_config(
         &dir,
         "a",
@@ -505,9 +508,24 @@ fn mapper_across_the_link_gets_each_frame_with_its_detections() {
     let (ok_b, so_b, se_b) = station.wait();
     assert!(ok_a, "robot failed:\n{so_a}\n{se_a}");
     assert!(ok_b, "station failed:\n{so_b}\n{se_b}");
-    // The robot scored a map the station's mapper made from the pairs that crossed.
+    // The robot scored a map the station's mapper made from the pairs that crossed, and every
+    // map the station's relay sent arrived whole (decoded and validated on the robot).
     let m = metrics(&out_a);
     assert!(m["objects_estimated"].as_u64().unwrap() > 0, "{m}\n{se_a}");
+    let sent = account(&so_b, "map", "out").expect("station's map account");
+    let came = account(&so_a, "map", "in").expect("robot's map account");
+    println!("maps: station {sent:?}, robot {came:?}");
+    assert!(sent.hz <= MAP_HZ, "{so_b}");
+    let maps = sent.counts[1].expect("crossed is counted");
+    assert!(maps > 0, "{so_b}");
+    assert_eq!(came.counts[0], Some(maps), "{so_a}\n{so_b}");
+    // The robot's recorder read them (but those that came after it stopped).
+    let ia = inspect::info(&out_a.join("trace.mcap")).unwrap();
+    let recorded = received(&ia, topic::MAP);
+    assert!(
+        recorded <= maps && maps - recorded <= 2,
+        "{recorded} of {maps}\n{ia}"
+    );
     // As many detections crossed as frames, and the mapper found the detections of every
     // frame it got (independent newest-first relays would leave most frames unmatched).
     let depth = account(&so_a, "depth", "out").expect("robot's depth account");

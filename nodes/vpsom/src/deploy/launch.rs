@@ -212,6 +212,7 @@ pub fn run(args: &RunArgs, cfg: &Config, exe: &Path) -> anyhow::Result<RunOutcom
             &args.namespace,
             &args.nodes,
             cfg,
+            args.time_scale,
         )?),
         None => None,
     };

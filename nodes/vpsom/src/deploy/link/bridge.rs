@@ -52,7 +52,7 @@ pub(crate) struct Spec {
     pub(super) linger: Duration,
     /// Each run topic's subscriber depth ([`super::watch::service_depths`]).
     pub(super) depths: Vec<(&'static str, usize)>,
-    /// Each run topic's wall rate at `[run] time_scale` ([`super::wall_hz`]), for the report.
+    /// Each run topic's wall rate at the run's time scale ([`super::wall_hz`]), for the report.
     pub(super) rates: Vec<(&'static str, Option<f64>)>,
 }
 
@@ -106,12 +106,15 @@ pub struct Link {
 }
 
 impl Link {
-    /// Start the tunnel for a run in `namespace` hosting `roles`.
+    /// Start the tunnel for a run in `namespace` hosting `roles`, at `time_scale` simulated
+    /// seconds per wall second (`--time-scale`: it sets each topic's wall rate, hence the
+    /// depths the tunnel creates the services with).
     pub fn start(
         args: &LinkArgs,
         namespace: &str,
         roles: &[&'static str],
         cfg: &Config,
+        time_scale: f64,
     ) -> Result<Self, LinkError> {
         check_overflow(&cfg.ports)?;
         let endpoints = args
@@ -170,10 +173,10 @@ impl Link {
             local,
             limited,
             poll_ms: cfg.link.poll_ms,
-            depths: super::watch::service_depths(cfg),
+            depths: super::watch::service_depths(cfg, time_scale),
             rates: RUN_TOPICS
                 .iter()
-                .map(|&t| (t, super::wall_hz(t, cfg, cfg.run.time_scale)))
+                .map(|&t| (t, super::wall_hz(t, cfg, time_scale)))
                 .collect(),
             linger: Duration::from_millis(cfg.link.linger_ms),
         };

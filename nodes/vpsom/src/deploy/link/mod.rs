@@ -351,7 +351,7 @@ pub struct TopicCount {
     pub inbound: bool,
     /// Rate-limited (`[link.max_hz]`): crosses through the relay `link/<topic>`.
     pub limited: bool,
-    /// Its wall rate, Hz (`[rates]` × `[run] time_scale`, at most `[link.max_hz]`).
+    /// Its wall rate, Hz (`[rates]` × the run's time scale, at most `[link.max_hz]`).
     pub hz: Option<f64>,
     /// Outbound: sequence numbers the publisher here used (summed over its restarts).
     pub published: u64,
@@ -383,6 +383,7 @@ impl Link {
         _namespace: &str,
         _roles: &[&'static str],
         _cfg: &crate::config::Config,
+        _time_scale: f64,
     ) -> Result<Self, LinkError> {
         Err(LinkError::NotBuilt)
     }

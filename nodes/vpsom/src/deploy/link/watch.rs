@@ -67,10 +67,10 @@ fn message_size(topic: &str) -> usize {
 const EXTRA_BORROWS: usize = 2;
 
 /// The subscriber depth the tunnel creates each run topic's services with (see the module
-/// docs): [`burst_depth`](super::burst_depth) of the topic's wall rate at `[run] time_scale`,
+/// docs): [`burst_depth`](super::burst_depth) of the topic's wall rate at `time_scale`,
 /// at least `[ports]`' depth and, for a small topic, at least `[link] buffer`. A node here may
 /// then subscribe that deep (the station's recorder does: `deploy::recorder::recorder_ports`).
-pub fn service_depths(cfg: &crate::config::Config) -> Vec<(&'static str, usize)> {
+pub fn service_depths(cfg: &crate::config::Config, time_scale: f64) -> Vec<(&'static str, usize)> {
     RUN_TOPICS
         .iter()
         .map(|&topic| {
@@ -81,7 +81,7 @@ pub fn service_depths(cfg: &crate::config::Config) -> Vec<(&'static str, usize)>
             } else {
                 configured.max(cfg.link.buffer)
             };
-            let hz = super::wall_hz(topic, cfg, cfg.run.time_scale);
+            let hz = super::wall_hz(topic, cfg, time_scale);
             (topic, super::burst_depth(hz, base, large))
         })
         .collect()
@@ -158,7 +158,7 @@ struct Watched {
     /// Rate-limited (`[link.max_hz]`): crosses through a relay, so its sequence gaps across the
     /// link are by design, not losses.
     limited: bool,
-    /// Its wall rate, Hz ([`super::wall_hz`] at `[run] time_scale`), for the report.
+    /// Its wall rate, Hz ([`super::wall_hz`] at the run's time scale), for the report.
     hz: Option<f64>,
     last_seq: Option<u64>,
     /// Sequence numbers of earlier publisher incarnations (a restarted node counts from 1).
@@ -405,5 +405,25 @@ mod tests {
         assert_eq!(w.published(), 7 + 5);
         assert_eq!((w.samples, w.missing, w.interior), (7, 5, 3));
         assert_eq!(w.samples + w.missing, w.published());
+    }
+
+    /// The tunnel's services hold a second of each topic at the run's own time scale
+    /// (`--time-scale`), not `[run] time_scale` (regression: a station at `--time-scale 4`
+    /// buffered half a second of robot/state).
+    #[test]
+    fn service_depths_hold_a_second_at_the_runs_time_scale() {
+        let mut cfg = crate::config::Config::builtin();
+        cfg.rates.state_hz = 50.0;
+        cfg.run.time_scale = 1.0;
+        let depth = |scale| {
+            service_depths(&cfg, scale)
+                .into_iter()
+                .find(|(t, _)| *t == topics::STATE)
+                .unwrap()
+                .1
+        };
+        assert_eq!(depth(4.0), 200);
+        assert_eq!(depth(5.0), 250);
+        assert!(depth(1.0) < 200);
     }
 }
