@@ -12,6 +12,7 @@
 //! - [`occlusion`]: non-occlusion measured on ground truth (visible fraction of every
 //!   foreground object in view, over every rendered frame), [`NonOcclusion`];
 //! - [`mapfile`]: `map.json` (write, read, re-score);
+//! - [`diagnose`]: where a map goes wrong (every object sorted into one outcome);
 //! - [`report`]: Tables 1 and 2 of the paper from many `metrics.json` (`report.md`, CSVs);
 //! - [`plot`]: Figure-10-style top-down PNGs;
 //! - [`sensing`]: the sensing report (`vpsom sensing`: detector, depth and pose errors per frame).
@@ -37,6 +38,7 @@
 //! # Ok(()) }
 //! ```
 
+pub mod diagnose;
 pub mod iou;
 pub mod mapfile;
 pub mod matching;

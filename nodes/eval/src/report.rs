@@ -347,6 +347,8 @@ pub struct Report {
     /// Number of runs aggregated.
     pub runs: usize,
     cells: BTreeMap<(String, String, &'static str), Stat>,
+    /// Further Markdown sections, placed before the definitions (e.g. [`super::diagnose`]'s).
+    pub sections: String,
 }
 
 impl Report {
@@ -389,6 +391,7 @@ impl Report {
             planners,
             runs: runs.len(),
             cells,
+            sections: String::new(),
         }
     }
 
@@ -482,6 +485,7 @@ impl Report {
         self.table_md(&mut md, &HEALTH, None);
         md.push_str("\n## Where the path goes and where recall is lost\n\n");
         self.table_md(&mut md, &DIAGNOSIS, None);
+        md.push_str(&self.sections);
         md.push_str(DEFINITIONS);
         if !figures.is_empty() {
             md.push_str("\n## Figures (one run per scene and planner, lowest seed)\n\n");
@@ -645,9 +649,13 @@ pub fn write_report(out_dir: &Path, report: &Report, figures: &[Figure]) -> Resu
 pub fn report_dirs(inputs: &[PathBuf], out_dir: &Path) -> Result<Report, EvalError> {
     let files = find_metrics_files(inputs)?;
     let runs = load_metrics(&files)?;
-    let report = Report::from_metrics(&runs);
+    let mut report = Report::from_metrics(&runs);
+    let (section, rows) = super::diagnose::report_files(&files, &runs)?;
+    report.sections.push_str(&section);
     let figures = super::render_bench_figures(&files, out_dir)?;
     write_report(out_dir, &report, &figures)?;
+    let path = out_dir.join(super::diagnose::CSV_FILE);
+    std::fs::write(&path, rows).map_err(|e| EvalError::io(&path, e))?;
     Ok(report)
 }
 
