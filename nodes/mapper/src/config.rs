@@ -58,6 +58,10 @@ pub struct MapperConfig {
     /// `[mapper.extensions] co_detection`: two foreground objects detected together (each by
     /// its own detection of one frame) in at least this many frames are never merged.
     pub distinct_after: u32,
+    /// `[mapper.extensions] co_detection`: ... and only when they were detected together in at
+    /// least this share of the frames in which either was detected while their cuboids
+    /// overlapped (0: `distinct_after` alone decides).
+    pub co_detection_min_share: f32,
     /// `[mapper.extensions] co_detection`: two detections of one frame whose points' bounds
     /// overlap by more than this fraction of the smaller bounds' volume saw one object (a
     /// mislocalised duplicate box) and are not counted as detected together (1: every pair
@@ -67,6 +71,8 @@ pub struct MapperConfig {
     pub sparse: SparseConfig,
     /// Flat objects (`[mapper.extensions] flat_objects`).
     pub flat: FlatConfig,
+    /// Objects with little valid depth placed from their box ([`super::standing`]).
+    pub standing: super::standing::StandingConfig,
     /// Association.
     pub association: AssociationConfig,
     /// Switches of the additions beyond the paper.
@@ -464,7 +470,8 @@ impl MapperConfig {
             cross_merge_iou: in_range(0.01, 1.0),
             distinct_after: count(1, 1_000_000),
             co_detection_max_overlap: in_range(0.0, 1.0),
-            [view_extents, flat, sparse, existence, segmentation, association, sopm]: section,
+            co_detection_min_share: in_range(0.0, 1.0),
+            [view_extents, flat, standing, sparse, existence, segmentation, association, sopm]: section,
             [registration, grid, level, yaw_calibration]: section,
         });
         Ok(())

@@ -19,6 +19,7 @@
 //! | `merge.rs` | duplicate merging |
 //! | `sparse.rs` | confident detections with few points (glass, far small objects) |
 //! | `flat.rs` | flat objects (phones) located by their box on the table top |
+//! | [`standing`] | objects with little valid depth (glass, dark) placed from their box on the table |
 //! | `publish.rs` | [`Mapper::write_map`], [`Mapper::write_grid`] |
 //! | `resume.rs` | [`Mapper::resume_from`]: a restarted mapper continues from its last published map |
 //! | [`grid`] | the exploration occupancy grid |
@@ -76,6 +77,7 @@ mod resume;
 pub mod segment;
 pub mod sopm;
 mod sparse;
+pub mod standing;
 pub mod wilcoxon;
 
 use association::voxel_centroids;
@@ -445,9 +447,27 @@ impl Mapper {
     }
 
     /// Every pair of foreground objects hit in this frame (each by its own detection) was
-    /// detected together once more, unless the two detections' points overlap by more
+    /// detected together once more (and, with `co_detection_min_share`, every pair overlapping
+    /// as duplicates of which one was hit was seen apart once more), unless the two detections' points overlap by more
     /// than `co_detection_max_overlap` of the smaller bounds (two boxes on one object).
     fn count_co_detections(&mut self) {
+        // Pairs overlapping as duplicates of which only one was detected: seen apart once more.
+        if self.cfg.co_detection_min_share > 0.0 {
+            let mut apart = Vec::new();
+            for i in 0..self.objects.len() {
+                for j in i + 1..self.objects.len() {
+                    let (a, b) = (&self.objects[i], &self.objects[j]);
+                    if a.hit != b.hit && !a.background && self.overlap_as_duplicates(i, j) {
+                        apart.push((i, j));
+                    }
+                }
+            }
+            for (i, j) in apart {
+                let (a, b) = (self.objects[i].id, self.objects[j].id);
+                self.objects[i].add_co_apart(b, 1);
+                self.objects[j].add_co_apart(a, 1);
+            }
+        }
         let hit: Vec<(u32, Option<(Vec3, Vec3)>)> = self
             .objects
             .iter()
@@ -542,6 +562,14 @@ impl Mapper {
                 && flat::is_flat(det.class_id, self.cfg.flat.max_height)
             {
                 n = self.flat_points(frame, camera, pose, det, &mut pts);
+            }
+            let few = n < self.cfg.min_points as usize;
+            if few && extract.boxes && fg && !flat::is_flat(det.class_id, self.cfg.flat.max_height)
+            {
+                let placed = self.standing_points(frame, camera, pose, det, &mut pts);
+                if placed > 0 {
+                    n = placed;
+                }
             }
             self.det_points[i] = pts;
             if n < self.cfg.min_points as usize
@@ -810,6 +838,49 @@ mod tests {
         m2.objects = m.objects.clone();
         m2.count_co_detections();
         assert_eq!(seen(&m2, 0, 1), 1);
+    }
+
+    #[test]
+    fn a_twin_seen_together_rarely_is_a_duplicate_and_neighbours_stay_two() {
+        let cam = Camera::from_fov(64, 48, 60.0, 46.8, 0.5, 5.0);
+        let cfg = MapperConfig {
+            co_detection_min_share: 0.35,
+            ..MapperConfig::default()
+        };
+        let mut m = Mapper::new(&cfg, &cam).unwrap();
+        let cup = |id, x: f32| {
+            let mut o = MappedObject::new(id, 41, 0.9, false, 0.01, 100, None, 0);
+            o.observations = 5;
+            o.cuboid = cuboid::Box3 {
+                center: Vec3::new(x, 0.0, 0.8),
+                size: Vec3::new(0.08, 0.08, 0.1),
+                yaw: 0.0,
+            };
+            o
+        };
+        // A twin 1 cm off the cup: its cuboid overlaps as a duplicate's.
+        m.objects = vec![cup(1, 0.0), cup(2, 0.01)];
+        assert!(m.overlap_as_duplicates(0, 1));
+        // Frames in which one of the two was detected alone count apart.
+        m.objects[0].hit = true;
+        m.count_co_detections();
+        assert_eq!(
+            (m.objects[0].co_apart_with(2), m.objects[1].co_apart_with(1)),
+            (1, 1)
+        );
+        // Detected together in 3 of 4 such frames (>= 0.35): two objects, never merged.
+        for o in &mut m.objects {
+            o.add_co_seen(3 - o.id, 3);
+        }
+        assert!(m.detected_apart(0, 1) && !m.duplicates(0, 1));
+        // ... in 3 of 23 (a duplicate box that comes back now and then): one object.
+        for o in &mut m.objects {
+            o.add_co_apart(3 - o.id, 19);
+        }
+        assert!(!m.detected_apart(0, 1) && m.duplicates(0, 1));
+        // With the share off, distinct_after (2) decides alone, as before.
+        m.cfg.co_detection_min_share = 0.0;
+        assert!(m.detected_apart(0, 1));
     }
 
     #[test]

@@ -19,14 +19,32 @@ impl Mapper {
     /// footprints, whatever their plane heights: a side view of a table yields a sliver whose
     /// "plane" is any height of its front face): IoU ≥ `merge_iou`, or the smaller one's centre
     /// inside the larger one with ≥ `merge_containment` of its volume (area) inside.
-    fn duplicates(&self, i: usize, j: usize) -> bool {
+    pub(super) fn duplicates(&self, i: usize, j: usize) -> bool {
+        !self.detected_apart(i, j) && self.overlap_as_duplicates(i, j)
+    }
+
+    /// Whether foreground objects `i` and `j` were detected together (each by its own
+    /// detection of one frame) often enough to be two objects (`[mapper.extensions]
+    /// co_detection`): in `distinct_after` frames, and in at least `co_detection_min_share` of
+    /// the frames in which either was detected while their cuboids overlapped. A detector
+    /// sees two real neighbours together in most such frames; an object and the twin that its
+    /// mislocalised duplicate boxes founded, only when such a box comes again.
+    pub(super) fn detected_apart(&self, i: usize, j: usize) -> bool {
         let (a, b) = (&self.objects[i], &self.objects[j]);
-        if a.background != b.background || a.observations == 0 || b.observations == 0 {
+        if !self.cfg.extensions.co_detection || a.background {
             return false;
         }
-        // Detected together (by two detections of one frame) often enough: two objects.
-        let k = self.cfg.distinct_after;
-        if self.cfg.extensions.co_detection && !a.background && a.co_seen_with(b.id) >= k {
+        let together = a.co_seen_with(b.id);
+        let alone = a.co_apart_with(b.id);
+        together >= self.cfg.distinct_after
+            && together as f32 >= self.cfg.co_detection_min_share * (together + alone) as f32
+    }
+
+    /// Whether the cuboids of objects `i` and `j` overlap as one object's seen twice (the
+    /// geometric part of [`Self::duplicates`]; see there).
+    pub(super) fn overlap_as_duplicates(&self, i: usize, j: usize) -> bool {
+        let (a, b) = (&self.objects[i], &self.objects[j]);
+        if a.background != b.background || a.observations == 0 || b.observations == 0 {
             return false;
         }
         let (ca, cb) = (&a.cuboid, &b.cuboid);

@@ -98,6 +98,9 @@ pub struct MappedObject {
     /// frame), with the number of such frames: two objects co-detected often are two objects,
     /// never duplicates (`[mapper.extensions] co_detection`).
     pub co_seen: Vec<(u32, u32)>,
+    /// Objects whose cuboid overlaps this one's as a duplicate's would, with the number of
+    /// frames in which only one of the two was detected (`[mapper] co_detection_min_share`).
+    pub co_apart: Vec<(u32, u32)>,
 }
 
 impl MappedObject {
@@ -143,6 +146,7 @@ impl MappedObject {
             hit_views: 0,
             views: Default::default(),
             co_seen: Vec::new(),
+            co_apart: Vec::new(),
         }
     }
 
@@ -158,6 +162,21 @@ impl MappedObject {
     /// Frames in which this object and object `id` were detected together.
     pub fn co_seen_with(&self, id: u32) -> u32 {
         self.co_seen.iter().find(|c| c.0 == id).map_or(0, |c| c.1)
+    }
+
+    /// Count one more frame in which only one of this object and object `id` (overlapping
+    /// it) was detected.
+    pub fn add_co_apart(&mut self, id: u32, n: u32) {
+        match self.co_apart.iter_mut().find(|c| c.0 == id) {
+            Some(c) => c.1 = c.1.saturating_add(n),
+            None => self.co_apart.push((id, n)),
+        }
+    }
+
+    /// Frames in which only one of this object and object `id` was detected while their
+    /// cuboids overlapped.
+    pub fn co_apart_with(&self, id: u32) -> u32 {
+        self.co_apart.iter().find(|c| c.0 == id).map_or(0, |c| c.1)
     }
 
     /// Add a class vote; the class becomes the majority (by summed score).
@@ -254,6 +273,12 @@ impl MappedObject {
             }
         }
         self.co_seen.retain(|c| c.0 != other.id);
+        for &(id, n) in &other.co_apart {
+            if id != self.id {
+                self.add_co_apart(id, n);
+            }
+        }
+        self.co_apart.retain(|c| c.0 != other.id);
         self.hit_views = self.hit_views.max(other.hit_views);
         self.hit |= other.hit;
         if self.support_height.is_none() {
