@@ -13,6 +13,7 @@
 //!   foreground object in view, over every rendered frame), [`NonOcclusion`];
 //! - [`mapfile`]: `map.json` (write, read, re-score);
 //! - [`report`]: Tables 1 and 2 of the paper from many `metrics.json` (`report.md`, CSVs);
+//! - [`stats`]: Wilcoxon signed-rank test, Holm correction, bootstrap CIs over rooms;
 //! - [`plot`]: Figure-10-style top-down PNGs;
 //! - [`sensing`]: the sensing report (`vpsom sensing`: detector, depth and pose errors per frame).
 //!
@@ -45,6 +46,7 @@ pub mod occlusion;
 pub mod plot;
 pub mod report;
 pub mod sensing;
+pub mod stats;
 
 pub use mapfile::{MapFile, MapFileObject, rescore_map_file};
 pub use matching::{MatchParams, ObjectMatch};
