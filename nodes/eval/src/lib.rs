@@ -13,7 +13,9 @@
 //!   foreground object in view, over every rendered frame), [`NonOcclusion`];
 //! - [`mapfile`]: `map.json` (write, read, re-score);
 //! - [`report`]: Tables 1 and 2 of the paper from many `metrics.json` (`report.md`, CSVs);
-//! - [`stats`]: Wilcoxon signed-rank test, Holm correction, bootstrap CIs over rooms;
+//! - [`stats`]: Wilcoxon signed-rank test, Holm correction, bootstrap CIs over rooms (the
+//!   report's and [`compare`]'s statistics);
+//! - [`compare`]: `vpsom report --compare A B`, paired differences between two bench folders;
 //! - [`plot`]: Figure-10-style top-down PNGs;
 //! - [`sensing`]: the sensing report (`vpsom sensing`: detector, depth and pose errors per frame).
 //!
@@ -38,6 +40,7 @@
 //! # Ok(()) }
 //! ```
 
+pub mod compare;
 pub mod iou;
 pub mod mapfile;
 pub mod matching;
