@@ -14,6 +14,9 @@
 //! - [`mapfile`]: `map.json` (write, read, re-score);
 //! - [`diagnose`]: where a map goes wrong (every object sorted into one outcome);
 //! - [`report`]: Tables 1 and 2 of the paper from many `metrics.json` (`report.md`, CSVs);
+//! - [`stats`]: Wilcoxon signed-rank test, Holm correction, bootstrap CIs over rooms (the
+//!   report's and [`compare`]'s statistics);
+//! - [`compare`]: `vpsom report --compare A B`, paired differences between two bench folders;
 //! - [`plot`]: Figure-10-style top-down PNGs;
 //! - [`sensing`]: the sensing report (`vpsom sensing`: detector, depth and pose errors per frame).
 //!
@@ -38,6 +41,7 @@
 //! # Ok(()) }
 //! ```
 
+pub mod compare;
 pub mod diagnose;
 pub mod iou;
 pub mod mapfile;
@@ -47,6 +51,7 @@ pub mod occlusion;
 pub mod plot;
 pub mod report;
 pub mod sensing;
+pub mod stats;
 
 pub use mapfile::{MapFile, MapFileObject, rescore_map_file};
 pub use matching::{MatchParams, ObjectMatch};

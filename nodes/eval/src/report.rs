@@ -4,10 +4,21 @@
 //! the number of runs that define the metric (a run whose IoU or CDE is null, because nothing
 //! was assigned, does not enter those cells). The "Ave" row pools every run of a planner over
 //! all scenes; with the same number of seeds per scene this equals the paper's mean of the scene
-//! means. The best planner per row is bold (ties at the displayed precision are all bold).
+//! means, and it carries a 95 % confidence interval bootstrapped over rooms, the seeds of a room
+//! kept together ([`stats::mean_ci`]; with at least two rooms).
+//!
+//! Below each table, the paired differences VP-SOM minus each other planner on the same (scene,
+//! seed): the mean with its 95 % CI (bootstrap over rooms of the room's differences) and the
+//! Wilcoxon signed-rank p-value, Holm-corrected over the metrics of that table
+//! ([`stats::paired`], [`stats::holm`]). Bold marks only a difference significant at
+//! p_holm < 0.05, in VP-SOM's favour or the other planner's; any other difference is written as
+//! a tie. In the tables, an "Ave" cell is bold when its planner wins every such paired test it
+//! is in (VP-SOM against every other planner, another planner against VP-SOM); scene rows (one
+//! room) are never bold. `paired.csv` and `ci.csv` hold the same figures.
 
 use super::metrics::Metrics;
 use super::plot::Figure;
+use super::stats::{self, Ci, Paired};
 use super::{EvalError, METRICS_FILE, read_json};
 use statrs::statistics::Statistics;
 use std::collections::BTreeMap;
@@ -271,6 +282,14 @@ pub const PAPER_TABLE2: [[[f64; 3]; 4]; 4] = [
 /// Column titles of the paper's planners.
 pub const PAPER_PLANNERS: [&str; 3] = ["VP-SOM", "Cover", "Frontier"];
 
+/// The tables, with their CSV names: each is one family of the Holm correction.
+pub const TABLES: [(&str, &[MetricDef]); 4] = [
+    ("table1", &TABLE1),
+    ("table2", &TABLE2),
+    ("health", &HEALTH),
+    ("diagnosis", &DIAGNOSIS),
+];
+
 /// Mean, sample standard deviation (0 for one value) and count.
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub struct Stat {
@@ -346,9 +365,48 @@ pub struct Report {
     pub planners: Vec<String>,
     /// Number of runs aggregated.
     pub runs: usize,
+    /// The planner the paired differences start from (VP-SOM), if it ran.
+    pub reference: Option<String>,
     cells: BTreeMap<(String, String, &'static str), Stat>,
     /// Further Markdown sections, placed before the definitions (e.g. [`super::diagnose`]'s).
     pub sections: String,
+    /// (planner, metric) → CI of the "Ave" mean over rooms (with two rooms or more).
+    cis: BTreeMap<(String, &'static str), Ci>,
+    /// (other planner, metric) → reference − other, Holm over the metrics of a table.
+    paired: BTreeMap<(String, &'static str), Paired>,
+}
+
+/// Values of one planner and metric per seed in one scene (finite values only).
+pub fn values_by_seed(
+    runs: &[Metrics],
+    scene: &str,
+    planner: &str,
+    def: &MetricDef,
+) -> BTreeMap<u64, f64> {
+    runs.iter()
+        .filter(|m| m.scene == scene && m.planner == planner)
+        .filter_map(|m| Some((m.seed, (def.get)(m)?)))
+        .filter(|(_, v)| v.is_finite())
+        .collect()
+}
+
+/// Whether a paired difference `d` (x − y) is significant in x's favour (`Some(true)`), in
+/// y's (`Some(false)`), or a tie (`None`); the direction is the signed ranks'.
+pub fn verdict(def: &MetricDef, d: &Paired) -> Option<bool> {
+    if !d.significant() || d.test.direction() == 0.0 {
+        return None;
+    }
+    let up = d.test.direction() > 0.0;
+    Some(up == (def.better == Better::Higher))
+}
+
+/// `p` for a table: three decimals, or `< 0.001`.
+pub fn format_p(p: f64) -> String {
+    if p < 0.001 {
+        "< 0.001".to_string()
+    } else {
+        format!("{p:.3}")
+    }
 }
 
 impl Report {
@@ -361,6 +419,7 @@ impl Report {
         planners.sort_by_key(|p| (paper_planner(p).unwrap_or(3), p.clone()));
         planners.dedup();
         let mut cells = BTreeMap::new();
+        let mut cis = BTreeMap::new();
         for def in TABLE1
             .iter()
             .chain(&TABLE2)
@@ -369,6 +428,7 @@ impl Report {
         {
             for planner in &planners {
                 let mut all = Vec::new();
+                let mut rooms = Vec::new();
                 for scene in &scenes {
                     let values: Vec<f64> = runs
                         .iter()
@@ -379,10 +439,47 @@ impl Report {
                     all.extend_from_slice(&values);
                     if let Some(s) = Stat::of(&values) {
                         cells.insert((scene.clone(), planner.clone(), def.key), s);
+                        rooms.push(values);
                     }
                 }
                 if let Some(s) = Stat::of(&all) {
                     cells.insert((AVERAGE.to_string(), planner.clone(), def.key), s);
+                }
+                if rooms.len() >= 2
+                    && let Some(ci) = stats::mean_ci(&rooms)
+                {
+                    cis.insert((planner.clone(), def.key), ci);
+                }
+            }
+        }
+        let reference = planners
+            .iter()
+            .find(|p| paper_planner(p) == Some(0))
+            .cloned();
+        let mut paired = BTreeMap::new();
+        for other in planners.iter().filter(|p| Some(*p) != reference.as_ref()) {
+            let Some(r) = &reference else { break };
+            for (_, defs) in TABLES {
+                let mut family: Vec<(&'static str, Paired)> = defs
+                    .iter()
+                    .filter_map(|def| {
+                        let rooms: Vec<Vec<f64>> = scenes
+                            .iter()
+                            .map(|scene| {
+                                let a = values_by_seed(runs, scene, r, def);
+                                let b = values_by_seed(runs, scene, other, def);
+                                a.iter()
+                                    .filter_map(|(seed, x)| Some(x - b.get(seed)?))
+                                    .collect::<Vec<f64>>()
+                            })
+                            .filter(|d| !d.is_empty())
+                            .collect();
+                        Some((def.key, stats::paired(&rooms)?))
+                    })
+                    .collect();
+                stats::holm_in_place(&mut family.iter_mut().map(|(_, d)| d).collect::<Vec<_>>());
+                for (key, d) in family {
+                    paired.insert((other.clone(), key), d);
                 }
             }
         }
@@ -390,9 +487,54 @@ impl Report {
             scenes,
             planners,
             runs: runs.len(),
+            reference,
             cells,
             sections: String::new(),
+            cis,
+            paired,
         }
+    }
+
+    /// The CI of a planner's "Ave" mean over rooms (`None` with fewer than two rooms).
+    pub fn ci(&self, planner: &str, key: &str) -> Option<Ci> {
+        self.cis
+            .iter()
+            .find(|((p, k), _)| p == planner && *k == key)
+            .map(|(_, v)| *v)
+    }
+
+    /// The paired difference reference (VP-SOM) − `other` of a metric, Holm-corrected over its
+    /// table.
+    pub fn paired(&self, other: &str, key: &str) -> Option<Paired> {
+        self.paired
+            .iter()
+            .find(|((p, k), _)| p == other && *k == key)
+            .map(|(_, v)| *v)
+    }
+
+    /// Planners bold in a row: only in the "Ave" row, VP-SOM when its paired difference from
+    /// every other planner is significant in its favour, another planner when its difference
+    /// from VP-SOM is significant in its favour.
+    pub fn bold(&self, scene: &str, def: &MetricDef) -> Vec<String> {
+        let Some(r) = self.reference.as_ref().filter(|_| scene == AVERAGE) else {
+            return Vec::new();
+        };
+        let others: Vec<&String> = self.planners.iter().filter(|p| *p != r).collect();
+        let verdicts: Vec<(&String, Option<bool>)> = others
+            .iter()
+            .map(|o| (*o, self.paired(o, def.key).and_then(|d| verdict(def, &d))))
+            .collect();
+        let mut bold = Vec::new();
+        if !verdicts.is_empty() && verdicts.iter().all(|(_, v)| *v == Some(true)) {
+            bold.push(r.clone());
+        }
+        bold.extend(
+            verdicts
+                .iter()
+                .filter(|(_, v)| *v == Some(false))
+                .map(|(o, _)| (*o).clone()),
+        );
+        bold
     }
 
     /// The statistics of one cell (`scene` may be [`AVERAGE`]; `key` a [`MetricDef::key`]).
@@ -403,7 +545,8 @@ impl Report {
             .map(|(_, v)| *v)
     }
 
-    /// Planners whose mean is best in a row (bold), compared at the displayed precision.
+    /// Planners whose mean is best in a row, compared at the displayed precision. Not a claim
+    /// (no test): the report bolds by [`Report::bold`].
     pub fn best(&self, scene: &str, def: &MetricDef) -> Vec<String> {
         let scale = 10f64.powi(def.decimals as i32);
         let rounded: Vec<(String, f64)> = self
@@ -465,10 +608,15 @@ impl Report {
         let _ = writeln!(
             md,
             "{} runs; scenes: {}; planners: {}.\n\nEach cell: mean ± sample std over seeds \
-             (n = runs defining the metric). Bold: best planner of the row. \"Ave\" pools all \
-             runs of a planner. Columns `paper …` repeat the paper's Tables 1 and 2 (Gazebo, \
-             5 runs per cell) for comparison; scenes named `paper-…-1/2/3` map to its scenes \
-             1–3.\n",
+             (n = runs defining the metric). \"Ave\" pools all runs of a planner: mean [95 % CI, \
+             bootstrap over rooms with the seeds of a room together, fixed seed] (n) with two rooms \
+             or more. Below each table: paired differences VP-SOM − each other planner on the \
+             same (scene, seed), mean [95 % CI over rooms], Wilcoxon signed-rank p Holm-corrected \
+             over the table's metrics. Bold only where that difference is significant \
+             (p_holm < 0.05): in the \"Ave\" row, VP-SOM when it wins against every other planner, \
+             another planner when it wins against VP-SOM; anything else is a tie. Columns \
+             `paper …` repeat the paper's Tables 1 and 2 (Gazebo, 5 runs per cell) for \
+             comparison; scenes named `paper-…-1/2/3` map to its scenes 1–3.\n",
             self.runs,
             self.scenes.join(", "),
             self.planners
@@ -521,14 +669,25 @@ impl Report {
         let _ = writeln!(md, "{header}\n{rule}");
         for scene in self.rows() {
             for (row, def) in defs.iter().enumerate() {
-                let best = self.best(&scene, def);
+                let bold = self.bold(&scene, def);
                 let scene_col = if row == 0 { scene.as_str() } else { "" };
                 let _ = write!(md, "| {scene_col} | {} |", def.label);
                 for p in &self.planners {
                     let text = match self.cell(&scene, p, def.key) {
                         Some(s) => {
-                            let body = format!("{:.d$} ± {:.d$}", s.mean, s.std, d = def.decimals);
-                            if best.contains(p) {
+                            let body = match self.ci(p, def.key).filter(|_| scene == AVERAGE) {
+                                Some(ci) => format!(
+                                    "{:.d$} [{:.d$}, {:.d$}]",
+                                    s.mean,
+                                    ci.lo,
+                                    ci.hi,
+                                    d = def.decimals
+                                ),
+                                None => {
+                                    format!("{:.d$} ± {:.d$}", s.mean, s.std, d = def.decimals)
+                                }
+                            };
+                            if bold.contains(p) {
                                 format!("**{body}** ({})", s.n)
                             } else {
                                 format!("{body} ({})", s.n)
@@ -553,6 +712,144 @@ impl Report {
                 md.push('\n');
             }
         }
+        self.paired_md(md, defs);
+    }
+
+    /// The paired differences of a table (nothing without VP-SOM and another planner).
+    fn paired_md(&self, md: &mut String, defs: &[MetricDef]) {
+        let Some(r) = &self.reference else { return };
+        let others: Vec<&String> = self.planners.iter().filter(|p| *p != r).collect();
+        if others.is_empty() {
+            return;
+        }
+        let rt = planner_title(r);
+        let _ = writeln!(
+            md,
+            "\nPaired differences, {rt} − other planner on the same (scene, seed): mean [95 % CI \
+             over rooms], p_holm, verdict (pairs).\n"
+        );
+        let mut header = String::from("| Metric |");
+        let mut rule = String::from("|---|");
+        for o in &others {
+            let _ = write!(header, " {rt} − {} |", planner_title(o));
+            rule.push_str("---|");
+        }
+        let _ = writeln!(md, "{header}\n{rule}");
+        for def in defs {
+            let _ = write!(md, "| {} |", def.label);
+            for o in &others {
+                let text = match self.paired(o, def.key) {
+                    Some(d) => {
+                        let dd = def.decimals + 1;
+                        let body =
+                            format!("{:+.dd$} [{:+.dd$}, {:+.dd$}]", d.ci.mean, d.ci.lo, d.ci.hi);
+                        let p = format_p(d.p_holm);
+                        let n = d.test.n + d.test.zeros;
+                        match verdict(def, &d) {
+                            Some(true) => format!("**{body}** p {p}, {rt} better ({n})"),
+                            Some(false) => {
+                                format!("**{body}** p {p}, {} better ({n})", planner_title(o))
+                            }
+                            None => format!("{body} p {p}, tie ({n})"),
+                        }
+                    }
+                    None => "–".to_string(),
+                };
+                let _ = write!(md, " {text} |");
+            }
+            md.push('\n');
+        }
+    }
+
+    /// CSV of the "Ave" CIs: `planner,metric,mean,ci_lo,ci_hi,rooms,n`.
+    pub fn ci_csv(&self) -> String {
+        const MEMORY: &str = "CSV into memory";
+        let mut w = csv::Writer::from_writer(Vec::new());
+        w.write_record(["planner", "metric", "mean", "ci_lo", "ci_hi", "rooms", "n"])
+            .expect(MEMORY);
+        for (_, defs) in TABLES {
+            for def in defs {
+                for p in &self.planners {
+                    if let Some(ci) = self.ci(p, def.key) {
+                        w.write_record([
+                            p,
+                            def.key,
+                            &ci.mean.to_string(),
+                            &ci.lo.to_string(),
+                            &ci.hi.to_string(),
+                            &ci.clusters.to_string(),
+                            &ci.n.to_string(),
+                        ])
+                        .expect(MEMORY);
+                    }
+                }
+            }
+        }
+        String::from_utf8(w.into_inner().expect(MEMORY)).expect("CSV of UTF-8 fields is UTF-8")
+    }
+
+    /// CSV of the paired differences: `table,reference,other,metric,pairs,zeros,rooms,
+    /// mean_diff,ci_lo,ci_hi,w_plus,w_minus,exact,p,p_holm,verdict` (verdict: the better
+    /// planner, or `tie`).
+    pub fn paired_csv(&self) -> String {
+        const MEMORY: &str = "CSV into memory";
+        let mut w = csv::Writer::from_writer(Vec::new());
+        w.write_record([
+            "table",
+            "reference",
+            "other",
+            "metric",
+            "pairs",
+            "zeros",
+            "rooms",
+            "mean_diff",
+            "ci_lo",
+            "ci_hi",
+            "w_plus",
+            "w_minus",
+            "exact",
+            "p",
+            "p_holm",
+            "verdict",
+        ])
+        .expect(MEMORY);
+        let Some(r) = &self.reference else {
+            return String::from_utf8(w.into_inner().expect(MEMORY)).expect("UTF-8");
+        };
+        for (table, defs) in TABLES {
+            for def in defs {
+                for o in self.planners.iter().filter(|p| *p != r) {
+                    let Some(d) = self.paired(o, def.key) else {
+                        continue;
+                    };
+                    let verdict = match verdict(def, &d) {
+                        Some(true) => r.as_str(),
+                        Some(false) => o.as_str(),
+                        None => "tie",
+                    };
+                    w.write_record([
+                        table,
+                        r,
+                        o,
+                        def.key,
+                        &(d.test.n + d.test.zeros).to_string(),
+                        &d.test.zeros.to_string(),
+                        &d.ci.clusters.to_string(),
+                        &d.ci.mean.to_string(),
+                        &d.ci.lo.to_string(),
+                        &d.ci.hi.to_string(),
+                        &d.test.w_plus.to_string(),
+                        &d.test.w_minus.to_string(),
+                        &d.test.exact.to_string(),
+                        &d.test.p.to_string(),
+                        &d.p_holm.to_string(),
+                        verdict,
+                    ])
+                    .expect(MEMORY);
+                }
+            }
+        }
+        String::from_utf8(w.into_inner().expect(MEMORY)).expect("CSV of UTF-8 fields is UTF-8")
     }
 }
 
@@ -625,7 +922,8 @@ pub fn load_metrics(files: &[PathBuf]) -> Result<Vec<Metrics>, EvalError> {
     files.iter().map(|f| read_json(f)).collect()
 }
 
-/// Write `report.md`, `table1.csv`, `table2.csv` and `health.csv` into `out_dir` (created).
+/// Write `report.md`, `table1.csv`, `table2.csv`, `health.csv`, `diagnosis.csv`, `ci.csv` and
+/// `paired.csv` into `out_dir` (created).
 /// `figures` (e.g. from [`super::render_bench_figures`] into the same directory) are linked
 /// from the markdown by file name.
 pub fn write_report(out_dir: &Path, report: &Report, figures: &[Figure]) -> Result<(), EvalError> {
@@ -636,6 +934,8 @@ pub fn write_report(out_dir: &Path, report: &Report, figures: &[Figure]) -> Resu
         ("table2.csv", report.csv("table2", &TABLE2)),
         ("health.csv", report.csv("health", &HEALTH)),
         ("diagnosis.csv", report.csv("diagnosis", &DIAGNOSIS)),
+        ("ci.csv", report.ci_csv()),
+        ("paired.csv", report.paired_csv()),
     ];
     for (name, text) in files {
         let path = out_dir.join(name);

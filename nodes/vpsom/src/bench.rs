@@ -18,8 +18,10 @@ pub struct BenchSpec {
     pub scenes: Vec<Scene>,
     /// Planner labels (`vpsom`, `coverage`, `frontier`, `vpsom-no-<term>`).
     pub planners: Vec<String>,
-    /// Seeds 1..=seeds.
+    /// Seeds per scene and planner.
     pub seeds: u64,
+    /// The first seed: runs use `first_seed..first_seed + seeds`.
+    pub first_seed: u64,
     /// Sessions run at once.
     pub jobs: usize,
     /// Output directory.
@@ -48,7 +50,7 @@ pub fn run_bench(spec: &BenchSpec) -> anyhow::Result<Vec<RunOutcome>> {
     for scene in &spec.scenes {
         for label in &spec.planners {
             let config = lockstep::config_for(&spec.config, label)?;
-            for seed in 1..=spec.seeds {
+            for seed in spec.first_seed..spec.first_seed + spec.seeds {
                 work.push(SessionSpec {
                     scene: scene.clone(),
                     config: config.clone(),

@@ -36,12 +36,19 @@ enum Command {
     /// Scene files: generate random rooms (`vpsom scene gen --seed N --out FILE`).
     #[command(subcommand)]
     Scene(SceneCmd),
-    /// Re-render tables and plots from saved metrics.json files.
+    /// Re-render tables and plots from saved metrics.json files; or, with --compare A B, the
+    /// paired differences B − A between two bench folders (compare.md).
     Report {
         /// Run directories or trees containing metrics.json files.
-        #[arg(required = true)]
+        #[arg(required_unless_present = "compare")]
         dirs: Vec<PathBuf>,
-        /// Where to write report.md, CSVs and figures (default: the first directory).
+        /// Compare two bench folders: B − A on the runs of the same (scene, planner, seed), or
+        /// on room means when they share no seed; says per metric whether the difference is
+        /// separated from the seed spread.
+        #[arg(long, num_args = 2, value_names = ["A", "B"], conflicts_with = "dirs")]
+        compare: Option<Vec<PathBuf>>,
+        /// Where to write report.md, CSVs and figures (default: the first directory), or
+        /// compare.md (default: B).
         #[arg(long)]
         out: Option<PathBuf>,
     },
@@ -168,6 +175,9 @@ struct BenchCmd {
     /// Seeds per scene and planner (default: `[bench] seeds`).
     #[arg(long)]
     seeds: Option<u64>,
+    /// First seed: the runs use seeds N..N+seeds-1.
+    #[arg(long, value_name = "N", default_value_t = 1)]
+    first_seed: u64,
     /// Sessions at once (default: one per CPU).
     #[arg(long)]
     jobs: Option<usize>,
@@ -311,7 +321,12 @@ fn main() -> ExitCode {
         Command::Sensing(cmd) => sensing_cmd(config, cmd),
         Command::Orbit(cmd) => orbit_cmd(config, cmd),
         Command::Scene(cmd) => scene_cmd(config, cmd),
-        Command::Report { dirs, out } => report(&dirs, out),
+        Command::Report {
+            compare: Some(ab),
+            out,
+            ..
+        } => compare(&ab[0], &ab[1], out),
+        Command::Report { dirs, out, .. } => report(&dirs, out),
         Command::Trace(cmd) => trace(cmd),
         Command::Replay(cmd) => replay_cmd(config, cmd),
         Command::Doctor => doctor(config),
@@ -554,16 +569,18 @@ fn bench_cmd(config: Option<PathBuf>, cmd: BenchCmd) -> anyhow::Result<ExitCode>
         scenes,
         planners,
         seeds: cmd.seeds.unwrap_or(b.seeds),
+        first_seed: cmd.first_seed,
         jobs,
         out: cmd.out,
         config: base.with_camera(b.camera_width, b.camera_height, b.camera_hz),
         max_sim_s: b.max_sim_s,
     };
     eprintln!(
-        "vpsom bench: {} scene(s) × {} planner(s) × {} seed(s), {} at once, camera {}x{} at {} Hz",
+        "vpsom bench: {} scene(s) × {} planner(s) × {} seed(s) from {}, {} at once, camera {}x{} at {} Hz",
         spec.scenes.len(),
         spec.planners.len(),
         spec.seeds,
+        spec.first_seed,
         spec.jobs,
         spec.config.camera.width,
         spec.config.camera.height,
@@ -726,6 +743,19 @@ fn report(dirs: &[PathBuf], out: Option<PathBuf>) -> anyhow::Result<ExitCode> {
         r.runs,
         out.join("report.md").display()
     );
+    Ok(ExitCode::SUCCESS)
+}
+
+fn compare(a: &Path, b: &Path, out: Option<PathBuf>) -> anyhow::Result<ExitCode> {
+    use vpsom::eval::compare;
+    let c = compare::compare_dirs(a, b)?;
+    let md = c.markdown();
+    let dir = out.unwrap_or_else(|| b.to_path_buf());
+    std::fs::create_dir_all(&dir).with_context(|| format!("creating {}", dir.display()))?;
+    let file = dir.join(compare::COMPARE_FILE);
+    std::fs::write(&file, &md).with_context(|| format!("writing {}", file.display()))?;
+    print!("{md}");
+    println!("comparison: {}", file.display());
     Ok(ExitCode::SUCCESS)
 }
 
