@@ -644,7 +644,9 @@ pub fn write_report(out_dir: &Path, report: &Report, figures: &[Figure]) -> Resu
 /// `inputs`, render one figure per (scene, planner) into `out_dir` and write the report there.
 pub fn report_dirs(inputs: &[PathBuf], out_dir: &Path) -> Result<Report, EvalError> {
     let files = find_metrics_files(inputs)?;
-    let runs = load_metrics(&files)?;
+    let mut runs = load_metrics(&files)?;
+    // In run order, not path order: shard folders merged give an unsharded bench's sums.
+    runs.sort_by(|a, b| (&a.scene, &a.planner, a.seed).cmp(&(&b.scene, &b.planner, b.seed)));
     let report = Report::from_metrics(&runs);
     let figures = super::render_bench_figures(&files, out_dir)?;
     write_report(out_dir, &report, &figures)?;
