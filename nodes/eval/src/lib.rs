@@ -145,16 +145,41 @@ pub(crate) fn read_json<T: serde::de::DeserializeOwned>(path: &Path) -> Result<T
     serde_json::from_str(&text).map_err(|e| EvalError::json(path, e))
 }
 
-/// Write everything a run leaves behind into `dir`: `metrics.json`, `map.json`, `plot.json`
-/// and the figure `map.png`. Creates `dir`.
+/// Write everything a run leaves behind into `dir`: `map.json`, `plot.json`, the figure
+/// `map.png`, and last `metrics.json`, atomically ([`write_metrics`]). Creates `dir`. A
+/// `metrics.json` that parses therefore means the run's other files are written too (what
+/// `vpsom bench --resume` relies on).
 pub fn write_run_outputs(
     dir: &Path,
     metrics: &Metrics,
     estimates: &[EstObject],
     plot: &PlotInput,
 ) -> Result<(), EvalError> {
-    write_json(&dir.join(METRICS_FILE), metrics)?;
     MapFile::from_estimates(&metrics.scene, estimates).write(&dir.join(MAP_FILE))?;
     write_json(&dir.join(PLOT_FILE), plot)?;
-    render_png(plot, &dir.join(FIGURE_FILE), plot::RUN_FIGURE_SIZE)
+    render_png(plot, &dir.join(FIGURE_FILE), plot::RUN_FIGURE_SIZE)?;
+    write_metrics(dir, metrics)
+}
+
+/// Write `dir/metrics.json` atomically: into `dir/.metrics.json.tmp` (a name the report does
+/// not collect), synced, then renamed over `metrics.json`. A process killed at any point leaves
+/// either the old file, no file, or the whole new one, never a torn `metrics.json`.
+pub fn write_metrics(dir: &Path, metrics: &Metrics) -> Result<(), EvalError> {
+    use std::io::Write as _;
+    std::fs::create_dir_all(dir).map_err(|e| EvalError::io(dir, e))?;
+    let path = dir.join(METRICS_FILE);
+    let tmp = dir.join(format!(".{METRICS_FILE}.tmp"));
+    let mut text = serde_json::to_string_pretty(metrics).map_err(|e| EvalError::json(&path, e))?;
+    text.push('\n');
+    let mut f = std::fs::File::create(&tmp).map_err(|e| EvalError::io(&tmp, e))?;
+    f.write_all(text.as_bytes())
+        .and_then(|()| f.sync_all())
+        .map_err(|e| EvalError::io(&tmp, e))?;
+    std::fs::rename(&tmp, &path).map_err(|e| EvalError::io(&path, e))
+}
+
+/// Read `dir/metrics.json` if it is complete: present and parsing fully as [`Metrics`]. `None`
+/// for a missing, torn or otherwise unreadable file.
+pub fn read_complete_metrics(dir: &Path) -> Option<Metrics> {
+    read_json(&dir.join(METRICS_FILE)).ok()
 }

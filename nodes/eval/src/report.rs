@@ -949,6 +949,14 @@ pub fn write_report(out_dir: &Path, report: &Report, figures: &[Figure]) -> Resu
 pub fn report_dirs(inputs: &[PathBuf], out_dir: &Path) -> Result<Report, EvalError> {
     let files = find_metrics_files(inputs)?;
     let runs = load_metrics(&files)?;
+    // In run order, not path order: shard folders merged give an unsharded bench's sums.
+    let mut order: Vec<usize> = (0..runs.len()).collect();
+    order.sort_by(|&a, &b| {
+        let key = |m: &Metrics| (m.scene.clone(), m.planner.clone(), m.seed);
+        key(&runs[a]).cmp(&key(&runs[b]))
+    });
+    let files: Vec<PathBuf> = order.iter().map(|&i| files[i].clone()).collect();
+    let runs: Vec<Metrics> = order.iter().map(|&i| runs[i].clone()).collect();
     let mut report = Report::from_metrics(&runs);
     let (section, rows) = super::diagnose::report_files(&files, &runs)?;
     report.sections.push_str(&section);

@@ -1,6 +1,12 @@
 //! `vpsom bench`: the paper's experiments — scenes × planners × seeds on the lockstep host, in
 //! parallel across cores, with a progress bar; one `metrics.json` per run under
 //! `DIR/<scene>/<planner>/<seed>/`, then `report.md`, CSV tables and Figure-10 PNGs.
+//!
+//! Sharded and resumable (issue 46): the run list, sorted by (scene, planner, seed), is split
+//! by [`Shard`] (`--shard K/N` takes the runs whose index modulo N is K − 1), and with
+//! `resume` a run whose `metrics.json` is complete ([`eval::read_complete_metrics`]; it is
+//! written last and atomically) is not run again. A shard writes no report: it would cover 1/N
+//! of the runs; `vpsom report DIR...` merges the shards' folders (docs/cluster.md).
 
 use super::lockstep::{self, SessionSpec};
 use crate::config::Config;
@@ -8,8 +14,128 @@ use crate::eval;
 use crate::sim::Scene;
 use crossbeam::channel;
 use indicatif::{ProgressBar, ProgressStyle};
+use std::fmt;
 use std::path::{Path, PathBuf};
+use std::str::FromStr;
 use std::time::Instant;
+
+/// One of N equal parts of a bench's run list: `--shard K/N`, K in 1..=N.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub struct Shard {
+    /// This part, 1-based (a Slurm array's task id `1..=N`).
+    pub k: usize,
+    /// The number of parts.
+    pub n: usize,
+}
+
+impl Shard {
+    /// The whole list.
+    pub const ALL: Shard = Shard { k: 1, n: 1 };
+
+    /// Whether the run at `index` of the sorted run list belongs to this shard.
+    pub fn contains(&self, index: usize) -> bool {
+        index % self.n == self.k - 1
+    }
+}
+
+impl fmt::Display for Shard {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        write!(f, "{}/{}", self.k, self.n)
+    }
+}
+
+/// Why a `--shard` value was refused (clap prints `invalid value 'VALUE' for '--shard <K/N>': `
+/// before it).
+#[derive(Debug, Clone, PartialEq, Eq, thiserror::Error)]
+pub enum ShardError {
+    /// Not two integers separated by `/`.
+    #[error("expected K/N, two integers with 1 <= K <= N (e.g. 2/4)")]
+    Syntax,
+    /// N is 0.
+    #[error("N = 0: there must be at least one shard")]
+    ZeroParts,
+    /// K is outside 1..=N.
+    #[error("K = {k} is not in 1..={n} (K counts from 1, like a Slurm array 1-N)")]
+    OutOfRange {
+        /// The part asked for.
+        k: usize,
+        /// The number of parts.
+        n: usize,
+    },
+}
+
+impl FromStr for Shard {
+    type Err = ShardError;
+
+    fn from_str(s: &str) -> Result<Self, Self::Err> {
+        let (k, n) = s
+            .split_once('/')
+            .and_then(|(k, n)| Some((k.trim().parse().ok()?, n.trim().parse().ok()?)))
+            .ok_or(ShardError::Syntax)?;
+        match (k, n) {
+            (_, 0) => Err(ShardError::ZeroParts),
+            (k, n) if k == 0 || k > n => Err(ShardError::OutOfRange { k, n }),
+            (k, n) => Ok(Shard { k, n }),
+        }
+    }
+}
+
+/// One run of the list: what [`run_list`] orders and [`Shard`] splits.
+#[derive(Debug, Clone, PartialEq, Eq, PartialOrd, Ord)]
+pub struct RunKey {
+    /// Scene name.
+    pub scene: String,
+    /// Planner label.
+    pub planner: String,
+    /// Seed.
+    pub seed: u64,
+}
+
+impl RunKey {
+    /// The run's folder under the bench directory: `<scene>/<planner>/<seed>`.
+    pub fn dir(&self, out: &Path) -> PathBuf {
+        out.join(&self.scene)
+            .join(&self.planner)
+            .join(self.seed.to_string())
+    }
+}
+
+/// The bench's run list, sorted by (scene, planner, seed) and deduplicated, so that every shard
+/// of the same command line computes the same list whatever order its flags came in; then the
+/// runs of `shard`.
+pub fn run_list(
+    scenes: &[&str],
+    planners: &[&str],
+    seeds: std::ops::Range<u64>,
+    shard: Shard,
+) -> Vec<RunKey> {
+    let mut all: Vec<RunKey> = scenes
+        .iter()
+        .flat_map(|scene| {
+            let seeds = seeds.clone();
+            planners.iter().flat_map(move |planner| {
+                seeds.clone().map(move |seed| RunKey {
+                    scene: scene.to_string(),
+                    planner: planner.to_string(),
+                    seed,
+                })
+            })
+        })
+        .collect();
+    all.sort();
+    all.dedup();
+    all.into_iter()
+        .enumerate()
+        .filter(|(i, _)| shard.contains(*i))
+        .map(|(_, r)| r)
+        .collect()
+}
+
+/// The metrics of a run already done: its `metrics.json` is complete and names this run.
+pub fn completed(key: &RunKey, out: &Path) -> Option<eval::Metrics> {
+    eval::read_complete_metrics(&key.dir(out))
+        .filter(|m| m.scene == key.scene && m.planner == key.planner && m.seed == key.seed)
+}
 
 /// What to run.
 #[derive(Debug, Clone)]
@@ -30,6 +156,10 @@ pub struct BenchSpec {
     pub config: Config,
     /// Simulated-time limit per session, seconds.
     pub max_sim_s: f64,
+    /// The part of the run list to run ([`Shard::ALL`]: every run, and the report).
+    pub shard: Shard,
+    /// Skip runs whose `metrics.json` is complete ([`completed`]).
+    pub resume: bool,
 }
 
 /// One finished run.
@@ -41,26 +171,60 @@ pub struct RunOutcome {
     pub result: Result<eval::Metrics, String>,
     /// Wall time, seconds.
     pub wall_s: f64,
+    /// Not run: its complete `metrics.json` was found (`resume`).
+    pub resumed: bool,
 }
 
-/// Run every session and write the report. Returns the per-run outcomes; a failed session is
-/// reported (and counted) without stopping the others.
+/// Run every session of the spec's shard and, unsharded, write the report over the whole output
+/// directory. Returns the per-run outcomes (with `resume`, the runs found complete first); a
+/// failed session is reported (and counted) without stopping the others.
 pub fn run_bench(spec: &BenchSpec) -> anyhow::Result<Vec<RunOutcome>> {
+    let scenes: Vec<&str> = spec.scenes.iter().map(|s| s.name.as_str()).collect();
+    let planners: Vec<&str> = spec.planners.iter().map(String::as_str).collect();
+    let mut configs = std::collections::BTreeMap::new();
+    for label in &spec.planners {
+        configs.insert(label.as_str(), lockstep::config_for(&spec.config, label)?);
+    }
     let mut work = Vec::new();
-    for scene in &spec.scenes {
-        for label in &spec.planners {
-            let config = lockstep::config_for(&spec.config, label)?;
-            for seed in spec.first_seed..spec.first_seed + spec.seeds {
-                work.push(SessionSpec {
-                    scene: scene.clone(),
-                    config: config.clone(),
-                    seed,
-                    label: label.clone(),
-                    max_sim_s: spec.max_sim_s,
-                    record: None,
-                });
-            }
+    let mut outcomes = Vec::new();
+    for key in run_list(
+        &scenes,
+        &planners,
+        spec.first_seed..spec.first_seed + spec.seeds,
+        spec.shard,
+    ) {
+        if spec.resume
+            && let Some(m) = completed(&key, &spec.out)
+        {
+            outcomes.push(RunOutcome {
+                dir: key.dir(&spec.out),
+                result: Ok(m),
+                wall_s: 0.0,
+                resumed: true,
+            });
+            continue;
         }
+        let scene = spec
+            .scenes
+            .iter()
+            .find(|s| s.name == key.scene)
+            .expect("the run list is built from these scenes");
+        work.push(SessionSpec {
+            scene: scene.clone(),
+            config: configs[key.planner.as_str()].clone(),
+            seed: key.seed,
+            label: key.planner,
+            max_sim_s: spec.max_sim_s,
+            record: None,
+        });
+    }
+    if !outcomes.is_empty() {
+        eprintln!(
+            "vpsom bench --resume: {} run(s) complete in {}, {} to run",
+            outcomes.len(),
+            spec.out.display(),
+            work.len()
+        );
     }
     let bar = ProgressBar::new(work.len() as u64);
     bar.set_style(
@@ -103,16 +267,20 @@ pub fn run_bench(spec: &BenchSpec) -> anyhow::Result<Vec<RunOutcome>> {
     });
     drop(done_tx);
     bar.finish();
-    let outcomes: Vec<RunOutcome> = done_rx.iter().collect();
-    eval::report::report_dirs(std::slice::from_ref(&spec.out), &spec.out)?;
+    outcomes.extend(done_rx.iter());
+    if spec.shard == Shard::ALL {
+        eval::report::report_dirs(std::slice::from_ref(&spec.out), &spec.out)?;
+    }
     Ok(outcomes)
 }
 
 fn run_one(session: &SessionSpec, out: &Path) -> RunOutcome {
-    let dir = out
-        .join(&session.scene.name)
-        .join(&session.label)
-        .join(session.seed.to_string());
+    let dir = RunKey {
+        scene: session.scene.name.clone(),
+        planner: session.label.clone(),
+        seed: session.seed,
+    }
+    .dir(out);
     let start = Instant::now();
     let result = lockstep::run_session(session, |_| {})
         .and_then(|r| {
@@ -124,6 +292,7 @@ fn run_one(session: &SessionSpec, out: &Path) -> RunOutcome {
         dir,
         result,
         wall_s: start.elapsed().as_secs_f64(),
+        resumed: false,
     }
 }
 

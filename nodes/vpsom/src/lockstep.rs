@@ -396,10 +396,16 @@ pub fn write_outputs(
     let plot = r
         .log
         .plot_input(&run, room(&spec.scene), &r.gt, &est, &r.metrics);
-    eval::write_run_outputs(dir, &r.metrics, &est, &plot)?;
+    // explore.png first: `write_run_outputs` writes metrics.json last, so a complete
+    // metrics.json means every output of the run is there (`vpsom bench --resume`).
+    std::fs::create_dir_all(dir).map_err(|e| eval::EvalError::Io {
+        path: dir.to_path_buf(),
+        source: e,
+    })?;
     let frontier = planner::frontier::FrontierParams::new(&spec.config.planner);
     let nav = frontier.nav.flooded(&r.nav, [r.base[0], r.base[1]]);
     super::gridpng::write(&dir.join(EXPLORE_FILE), &r.explore, &frontier, &nav)?;
+    eval::write_run_outputs(dir, &r.metrics, &est, &plot)?;
     Ok(())
 }
 

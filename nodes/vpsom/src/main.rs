@@ -208,6 +208,16 @@ struct BenchCmd {
     /// the SLAM's 6-DoF part, neck bias, neck noise, stamp delay); writes pose-ablation.md.
     #[arg(long, conflicts_with_all = ["ablation", "sensitivity"])]
     pose_ablation: bool,
+    /// Run only part K of N of the run list (sorted by scene, planner, seed; the runs whose
+    /// index modulo N is K − 1), e.g. one task of a Slurm array. Writes no report, since it
+    /// would cover 1/N of the runs: merge the shards with `vpsom report DIR...` (the shards may
+    /// share one --out). See docs/cluster.md.
+    #[arg(long, value_name = "K/N")]
+    shard: Option<bench::Shard>,
+    /// Skip the runs whose metrics.json in --out is complete (a preempted or killed bench
+    /// continues where it stopped; a torn or missing file is run again).
+    #[arg(long)]
+    resume: bool,
 }
 
 #[derive(Debug, Subcommand)]
@@ -574,9 +584,16 @@ fn bench_cmd(config: Option<PathBuf>, cmd: BenchCmd) -> anyhow::Result<ExitCode>
         out: cmd.out,
         config: base.with_camera(b.camera_width, b.camera_height, b.camera_hz),
         max_sim_s: b.max_sim_s,
+        shard: cmd.shard.unwrap_or(bench::Shard::ALL),
+        resume: cmd.resume,
+    };
+    let part = match cmd.shard {
+        Some(s) => format!(" (shard {s})"),
+        None => String::new(),
     };
     eprintln!(
-        "vpsom bench: {} scene(s) × {} planner(s) × {} seed(s) from {}, {} at once, camera {}x{} at {} Hz",
+        "vpsom bench: {} scene(s) × {} planner(s) × {} seed(s) from {}{part}, {} at once, \
+         camera {}x{} at {} Hz",
         spec.scenes.len(),
         spec.planners.len(),
         spec.seeds,
@@ -595,7 +612,12 @@ fn bench_cmd(config: Option<PathBuf>, cmd: BenchCmd) -> anyhow::Result<ExitCode>
     } else {
         None
     };
-    if let Some(table) = table {
+    if let (Some(table), Some(shard)) = (table, cmd.shard) {
+        println!(
+            "{table}: not written by shard {shard} (it would cover part of the runs); when every \
+             shard is done, the same command with --resume and no --shard writes it"
+        );
+    } else if let Some(table) = table {
         let file = spec.out.join(table);
         std::fs::write(&file, bench::sensitivity_table(&outcomes))
             .with_context(|| format!("writing {}", file.display()))?;
@@ -609,12 +631,24 @@ fn bench_cmd(config: Option<PathBuf>, cmd: BenchCmd) -> anyhow::Result<ExitCode>
             f.result.as_ref().err().map_or("", |e| e)
         );
     }
-    println!(
-        "{} runs in {:.0} s; report: {}",
-        outcomes.len(),
-        start.elapsed().as_secs_f64(),
-        spec.out.join("report.md").display()
-    );
+    let resumed = outcomes.iter().filter(|o| o.resumed).count();
+    let runs = match resumed {
+        0 => format!("{} runs", outcomes.len()),
+        r => format!("{} runs ({r} already complete)", outcomes.len()),
+    };
+    let secs = start.elapsed().as_secs_f64();
+    match cmd.shard {
+        None => println!(
+            "{runs} in {secs:.0} s; report: {}",
+            spec.out.join("report.md").display()
+        ),
+        Some(shard) => println!(
+            "shard {shard}: {runs} in {secs:.0} s in {}; no report (a shard's would cover 1/{} \
+             of the runs): merge with `vpsom report DIR...` when every shard is done",
+            spec.out.display(),
+            shard.n
+        ),
+    }
     Ok(if failed.is_empty() {
         ExitCode::SUCCESS
     } else {
