@@ -1,14 +1,15 @@
 //! The scene generator (`vpsom::sim::scenegen`, `vpsom scene gen`): generated rooms pass the
 //! scene loader, are deterministic per seed and differ across seeds, keep their objects on their
 //! supports without interpenetration, let some reachable pose see every object (checked again
-//! here through the sim's depth renderer), often hide a cluster from the start view, and run in
-//! a lockstep session.
+//! here through the sim's depth renderer), often hide a cluster from the start view, draw every
+//! size inside its cited catalogue range (`scenegen::catalog`), and run in a lockstep session.
 
 use glam::{Vec2, Vec3};
 use parry3d::shape::{Cuboid, Cylinder, Shape as PShape};
 use std::path::Path;
 use vpsom::config::Config;
 use vpsom::lockstep::{self, SessionSpec};
+use vpsom::sim::scenegen::catalog::{self, CHAIR, ITEMS};
 use vpsom::sim::scenegen::{self, Generated, Kind, visibility};
 use vpsom::sim::{DepthCamera, RenderBuffers, Scene, Shape, World};
 
@@ -40,16 +41,6 @@ fn seeds_1_to_40_give_valid_rooms_of_every_kind_within_the_ranges() {
         assert!((1..=4).contains(&s.clusters), "seed {seed}: {s:?}");
         assert!((5..=25).contains(&s.objects), "seed {seed}: {s:?}");
         assert_eq!(s.objects, g.scene.foreground().count());
-        for i in g.scene.foreground() {
-            let id = g.scene.objects[i].class_id;
-            let prior = vpsom::mapper::priors::size_prior(id);
-            assert_ne!(
-                prior.size,
-                [0.5, 0.5, 0.5],
-                "{}: no mapper prior",
-                g.scene.objects[i].class
-            );
-        }
         let grid = vpsom::sim::NavGrid::build(&g.scene, cfg.robot.radius, 0.05).unwrap();
         let start = Vec2::new(g.scene.robot_start[0], g.scene.robot_start[1]);
         assert!(!grid.is_blocked(start), "seed {seed}: start blocked");
@@ -67,6 +58,52 @@ fn seeds_1_to_40_give_valid_rooms_of_every_kind_within_the_ranges() {
         occluded >= 40,
         "only {occluded} partly occluded objects in 40 rooms"
     );
+}
+
+/// Every object's size `[x, y, z]` (length, width, height, metres) lies in one of its class's
+/// size families, as the catalogue cites them; furniture in its template's ranges. The sizes are
+/// snapped to millimetres, hence the 0.6 mm tolerance.
+#[test]
+fn every_size_lies_in_its_cited_catalogue_range() {
+    const TOL: f32 = 0.0006;
+    let mut checked = std::collections::BTreeMap::<String, usize>::new();
+    for seed in 1..=24 {
+        let g = gen_seed(seed);
+        for o in &g.scene.objects {
+            let size = o.size.to_array();
+            if o.background {
+                let stem = o.name.rsplit_once('_').map_or(o.name.as_str(), |(s, _)| s);
+                let t = catalog::furniture(g.kind)
+                    .iter()
+                    .chain([&CHAIR])
+                    .find(|t| t.label == stem)
+                    .unwrap_or_else(|| panic!("seed {seed}: {} is no template", o.name));
+                assert!(
+                    t.dims.contains(size, TOL),
+                    "seed {seed}: {} {size:?} outside {:?} ({})",
+                    o.name,
+                    t.dims,
+                    t.source
+                );
+            } else {
+                let it = ITEMS.iter().find(|i| i.class == o.class).unwrap();
+                assert!(
+                    it.sizes.iter().any(|d| d.contains(size, TOL)),
+                    "seed {seed}: {} {size:?} outside every family of {:?} ({})",
+                    o.name,
+                    it.sizes,
+                    it.source
+                );
+                assert!(it.range().contains(size, TOL));
+                if o.shape == Shape::Cylinder {
+                    assert_eq!(o.size.x, o.size.y, "seed {seed}: {}", o.name);
+                }
+            }
+            *checked.entry(o.class.clone()).or_default() += 1;
+        }
+    }
+    println!("objects checked per class in seeds 1..=24: {checked:?}");
+    assert!(checked.len() >= 15, "only {} classes drawn", checked.len());
 }
 
 #[test]

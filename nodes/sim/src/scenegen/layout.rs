@@ -247,9 +247,9 @@ fn place_furniture(
     let room = d.room;
     for _ in 0..40 {
         let (long, short, h) = (
-            uniform(rng, t.long),
-            uniform(rng, t.short),
-            uniform(rng, t.height),
+            uniform(rng, t.dims.length),
+            uniform(rng, t.dims.width),
+            uniform(rng, t.dims.height),
         );
         let (center, yaw) = match t.placement {
             Placement::Wall => {
@@ -315,9 +315,9 @@ fn place_chair(rng: &mut Pcg64, d: &mut Draft, s: usize, number: usize) -> bool 
     for _ in 0..10 {
         let side = if rng.random::<bool>() { 1.0 } else { -1.0 };
         let (w, depth, h) = (
-            uniform(rng, CHAIR.long),
-            uniform(rng, CHAIR.short),
-            uniform(rng, CHAIR.height),
+            uniform(rng, CHAIR.dims.length),
+            uniform(rng, CHAIR.dims.width),
+            uniform(rng, CHAIR.dims.height),
         );
         let gap = uniform(rng, (0.05, 0.25));
         let slide = uniform(rng, (-0.3, 0.3)) * table.size.x;
@@ -375,13 +375,19 @@ pub(crate) fn draw_start(
     None
 }
 
+/// An object's size: one of the class's size families, each as likely, then every axis uniform
+/// in the family's range (a cylinder's width is its length, the diameter); snapped to mm.
 fn draw_item(rng: &mut Pcg64, item: &Item) -> (Vec3, Material) {
-    let long = uniform(rng, item.long);
-    let short = match item.shape {
-        Shape::Cylinder => long,
-        Shape::Box => uniform(rng, item.short),
+    let family = match item.sizes {
+        [one] => one,
+        many => &many[rng.random_range(0..many.len())],
     };
-    let size = Vec3::new(mm(long), mm(short), mm(uniform(rng, item.height)));
+    let length = uniform(rng, family.length);
+    let width = match item.shape {
+        Shape::Cylinder => length,
+        Shape::Box => uniform(rng, family.width),
+    };
+    let size = Vec3::new(mm(length), mm(width), mm(uniform(rng, family.height)));
     (size, weighted(rng, item.materials))
 }
 

@@ -5,7 +5,7 @@
 //! |---|---|
 //! | `mod.rs` | [`generate`]: attempts, validation round trip, statistics |
 //! | `config.rs` | [`SceneGenConfig`], the `[scenegen]` section |
-//! | `catalog.rs` | [`Kind`]s of room, their furniture and object classes, sizes, materials |
+//! | `catalog.rs` | [`Kind`]s of room, their furniture and object classes, sizes with their sources, materials |
 //! | `layout.rs` | one random layout: room, partition, supports, chairs, start, objects |
 //! | `visibility.rs` | checks with the sim's ray casting: [`visibility::check`], [`visibility::clusters_out_of_start_view`] |
 //! | `write.rs` | the scene file text |
@@ -18,8 +18,10 @@
 //! (facing the first cluster with probability `start_faces_cluster`, else any direction, and
 //! seeing at least `start_min_features` of the simulated visual SLAM's features, so that
 //! tracking starts: [`start_features`]), and
-//! 5–25 foreground objects of classes with a mapper size prior, sizes from a catalogue, each
-//! resting on a support top (z from the top), 15 mm apart at least, with plausible materials.
+//! 5–25 foreground objects, each resting on a support top (z from the top), 15 mm apart at
+//! least, with plausible materials. Furniture and object sizes come from the generator's own
+//! catalogue of cited standards and product ranges ([`catalog`], `docs/simulator.md`), not from
+//! anything the robot's nodes believe about a class.
 //!
 //! The layout is written as scene text and parsed back with [`Scene::parse`], so a generated
 //! scene passes exactly the validation of hand-written ones. Then every foreground object must
@@ -36,7 +38,7 @@
 //! assert!(g.stats.objects >= 5 && g.stats.objects <= 25);
 //! ```
 
-mod catalog;
+pub mod catalog;
 mod config;
 mod layout;
 pub mod visibility;
