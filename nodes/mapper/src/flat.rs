@@ -22,6 +22,20 @@ pub fn is_flat(class_id: shm_types::ClassId, max_height: f32) -> bool {
 }
 
 impl Mapper {
+    /// The height of the highest mapped supporting plane below the camera at `cam` whose
+    /// footprint holds the point where the world ray `ray` meets it; `None` when the ray does
+    /// not point down or meets none.
+    pub(super) fn plane_hit_by(&self, cam: Vec3, ray: Vec3) -> Option<f32> {
+        if ray.z >= 0.0 {
+            return None;
+        }
+        self.supports
+            .iter()
+            .filter(|s| s.height < cam.z && s.under(cam + ray * ((s.height - cam.z) / ray.z)))
+            .map(|s| s.height)
+            .max_by(f32::total_cmp)
+    }
+
     /// The points of a flat object's box-only detection on the table top under it (see the
     /// module doc); `out` is cleared first. Returns the number of points (0: not a flat class,
     /// no mapped table under the box, or the box is not on a free table region).
@@ -46,20 +60,10 @@ impl Mapper {
         if x1 <= x0 || y1 <= y0 {
             return 0;
         }
-        // The table under the box's centre: the highest mapped plane below the camera whose
-        // footprint holds the centre ray's hit.
+        // The table under the box's centre.
         let world_ray = |u: f32, v: f32| pose.transform_vector3(camera.ray(u, v));
         let centre = world_ray(0.5 * (x0 + x1), 0.5 * (y0 + y1));
-        if centre.z >= 0.0 {
-            return 0;
-        }
-        let Some(plane) = self
-            .supports
-            .iter()
-            .filter(|s| s.height < cam.z && s.under(cam + centre * ((s.height - cam.z) / centre.z)))
-            .map(|s| s.height)
-            .max_by(f32::total_cmp)
-        else {
+        let Some(plane) = self.plane_hit_by(cam, centre) else {
             return 0;
         };
         let top = plane + thickness;

@@ -117,16 +117,7 @@ impl Mapper {
         // below the camera whose footprint holds it.
         let uc = 0.5 * (x0 + x1);
         let bottom = world_ray(uc, y1 - 0.5);
-        if bottom.z >= 0.0 {
-            return 0;
-        }
-        let Some(plane) = self
-            .supports
-            .iter()
-            .filter(|p| p.height < cam.z && p.under(cam + bottom * ((p.height - cam.z) / bottom.z)))
-            .map(|p| p.height)
-            .max_by(f32::total_cmp)
-        else {
+        let Some(plane) = self.plane_hit_by(cam, bottom) else {
             return 0;
         };
         let base = cam + bottom * ((plane - cam.z) / bottom.z);
