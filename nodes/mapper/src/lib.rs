@@ -447,9 +447,10 @@ impl Mapper {
     }
 
     /// Every pair of foreground objects hit in this frame (each by its own detection) was
-    /// detected together once more (and, with `co_detection_min_share`, every pair overlapping
-    /// as duplicates of which one was hit was seen apart once more), unless the two detections' points overlap by more
-    /// than `co_detection_max_overlap` of the smaller bounds (two boxes on one object).
+    /// detected together once more, unless the two detections' points overlap by more than
+    /// `co_detection_max_overlap` of the smaller bounds (two boxes on one object). With
+    /// `co_detection_min_share`, every pair overlapping as duplicates of which only one was hit
+    /// was seen apart once more.
     fn count_co_detections(&mut self) {
         // Pairs overlapping as duplicates of which only one was detected: seen apart once more.
         if self.cfg.co_detection_min_share > 0.0 {
